@@ -1,0 +1,4 @@
+//! The `sixaxis` command.
+fn main() {
+    println!("sixaxis: under construction");
+}

@@ -1,0 +1,21 @@
+//! # sixaxis-core
+//!
+//! The pure-Rust core of SixAxisAvoid: a six-axis arm that learns to reach a target through
+//! clutter, after *Path Planning with Autonomous Obstacle Avoidance Using Reinforcement
+//! Learning for Six-axis Arms*. No Python here: the `sixaxis` binary and the
+//! `sixaxis_avoid._core` extension are thin layers over this crate.
+//!
+//! Modules, in the order the method uses them:
+//! - [`scenario`] — the world of one experiment, from JSON.
+//! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
+//! - [`error`] — the one error type.
+//!
+//! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
+
+pub mod error;
+pub mod kinematics;
+pub mod scenario;
+
+pub use error::{Error, Result};
+pub use kinematics::{Arm, Joints, TerminalPose};
+pub use scenario::{Cell, Scenario};

@@ -1,0 +1,552 @@
+//! Scenarios: the world of one experiment, read from JSON (`envs/*.json`).
+//!
+//! Entry points:
+//! - [`Scenario::load`] — by built-in name (`paper_simple`) or by file path.
+//! - [`Scenario::from_json`] / [`Scenario::to_json`] — text round trip; parsing rejects
+//!   unknown fields and then runs [`Scenario::validate`].
+//! - [`Scenario::builtin`] / [`BUILTIN_NAMES`] — the scenarios shipped in `envs/`, compiled in.
+//!
+//! Field names say what a value is; the paper's symbols are in each field's doc line and in
+//! `docs/SCENARIOS.md`. Distances between cells are in cells (grid unit = `cell_mm` mm).
+//!
+//! ```
+//! use sixaxis_core::scenario::Scenario;
+//! let s = Scenario::load("paper_simple").unwrap();
+//! assert_eq!(s.start, [0, -2, 4]);
+//! assert_eq!(s.target, [0, 3, 0]);
+//! ```
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
+
+/// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.
+pub type Cell = [i32; 3];
+
+/// Scenarios shipped in `envs/`, by name.
+pub const BUILTIN_NAMES: &[&str] = &["paper_simple", "paper_complex", "replan_shelf"];
+
+fn builtin_text(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "paper_simple" => include_str!("../../../envs/paper_simple.json"),
+        "paper_complex" => include_str!("../../../envs/paper_complex.json"),
+        "replan_shelf" => include_str!("../../../envs/replan_shelf.json"),
+        _ => return None,
+    })
+}
+
+/// Axis-aligned box of cells, both corners included.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bounds {
+    /// Lowest corner cell (inclusive).
+    pub min: Cell,
+    /// Highest corner cell (inclusive).
+    pub max: Cell,
+}
+
+impl Bounds {
+    /// Whether `c` lies inside the box.
+    #[inline]
+    pub fn contains(&self, c: Cell) -> bool {
+        (0..3).all(|i| c[i] >= self.min[i] && c[i] <= self.max[i])
+    }
+
+    /// Number of cells along each axis.
+    pub fn size(&self) -> [usize; 3] {
+        [0, 1, 2].map(|i| (self.max[i] - self.min[i] + 1).max(0) as usize)
+    }
+
+    /// Number of cells in the box.
+    pub fn volume(&self) -> usize {
+        self.size().iter().product()
+    }
+}
+
+/// Reward parameters (eqs. 5, 9, 10). Penalties are given as positive magnitudes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Rewards {
+    /// r (eq. 5): reward for reaching the target.
+    pub target_reward: f64,
+    /// p (eq. 5): penalty of a step that neither collides nor reaches the target.
+    pub step_penalty: f64,
+    /// P (eq. 5): penalty of a collision (obstacle or bounds).
+    pub collision_penalty: f64,
+    /// p_e (eq. 9): extra penalty when the step after a collision collides again.
+    pub repeat_collision_penalty: f64,
+    /// p_o (eq. 9): extra penalty when the step after a collision takes the opposite action.
+    pub reverse_after_collision_penalty: f64,
+    /// r_e (eq. 10): reward per cell of progress, `r_e * (d_o - d_t)`.
+    pub distance_reward: f64,
+}
+
+impl Default for Rewards {
+    fn default() -> Self {
+        Rewards {
+            target_reward: 20000.0,
+            step_penalty: 15000.0,
+            collision_penalty: 8000.0,
+            repeat_collision_penalty: 230000.0,
+            reverse_after_collision_penalty: 10000.0,
+            distance_reward: 40.0,
+        }
+    }
+}
+
+/// Q-learning parameters (eqs. 6-7) and the assisted strategies.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Learning {
+    /// alpha: learning rate.
+    pub alpha: f64,
+    /// gamma: discount factor.
+    pub gamma: f64,
+    /// epsilon at episode 0 (eq. 7: 0.1).
+    pub epsilon_start: f64,
+    /// M: episodes over which epsilon falls linearly to 0.
+    pub epsilon_decay_episodes: u32,
+    /// eta_set: number of learning episodes.
+    pub episodes: u32,
+    /// Step cap of one episode (the paper gives none).
+    pub max_steps_per_episode: u32,
+    /// Detour encouraging (eq. 9) on or off.
+    pub assist_detour: bool,
+    /// Distance assistance (eq. 10) on or off.
+    pub assist_distance: bool,
+    /// Default seed of the learner's random generator.
+    pub seed: u64,
+}
+
+impl Default for Learning {
+    fn default() -> Self {
+        Learning {
+            alpha: 0.05,
+            gamma: 0.9,
+            epsilon_start: 0.1,
+            epsilon_decay_episodes: 9900,
+            episodes: 10000,
+            max_steps_per_episode: 1000,
+            assist_detour: true,
+            assist_distance: true,
+            seed: 0,
+        }
+    }
+}
+
+/// The arm: its D-H table, initial pose and optional joint limits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ArmSpec {
+    /// Six modified D-H rows (Table 2 by default).
+    pub dh: Vec<DhRow>,
+    /// beta_0: the initial pose, degrees; its terminal must lie on the start cell.
+    pub beta0_deg: [f64; 6],
+    /// Optional joint limits, degrees, `[low, high]` per joint (the paper sets none).
+    pub joint_limits_deg: Option<[[f64; 2]; 6]>,
+}
+
+impl Default for ArmSpec {
+    fn default() -> Self {
+        ArmSpec {
+            dh: PAPER_DH.to_vec(),
+            beta0_deg: PAPER_BETA0_DEG,
+            joint_limits_deg: None,
+        }
+    }
+}
+
+impl ArmSpec {
+    /// The kinematic arm of this spec (assumes a validated spec with six rows).
+    pub fn arm(&self) -> Arm {
+        let mut rows = PAPER_DH;
+        for (dst, src) in rows.iter_mut().zip(&self.dh) {
+            *dst = *src;
+        }
+        Arm::new(rows)
+    }
+
+    /// beta_0 in radians.
+    pub fn beta0_rad(&self) -> [f64; 6] {
+        self.beta0_deg.map(f64::to_radians)
+    }
+}
+
+/// How the arm's clearance from obstacles is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClearanceModel {
+    /// The paper's eq. 11: distance from each obstacle centre to each segment of the
+    /// polyline, compared with `arm_safe_distance` (cells).
+    Centres,
+    /// Exact geometry (parry3d): links as capsules of radius `link_radius_mm`, obstacles
+    /// as cubes of one cell; the gap between them must exceed `margin_mm`.
+    Capsules {
+        /// Radius of every link capsule, mm.
+        link_radius_mm: f64,
+        /// Required gap between a capsule and a cube, mm.
+        margin_mm: f64,
+    },
+}
+
+/// Pose planning parameters (Algorithms 1 and 2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Planning {
+    /// t: interpolation steps between two poses.
+    pub interpolation_steps: u32,
+    /// n_d: divisions of a full turn in the orientation grid (eq. 12).
+    pub orientation_divisions: u32,
+    /// Re-plans allowed before Algorithm 2 gives up.
+    pub max_replans: u32,
+    /// Clearance model of the whole-arm check.
+    pub clearance_model: ClearanceModel,
+}
+
+impl Default for Planning {
+    fn default() -> Self {
+        Planning {
+            interpolation_steps: 50,
+            orientation_divisions: 8,
+            max_replans: 20,
+            clearance_model: ClearanceModel::Centres,
+        }
+    }
+}
+
+/// One experiment's world: grid, obstacles, arm, rewards, learning and planning parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name (the file stem for shipped scenarios).
+    pub name: String,
+    /// Free text: where the numbers come from, interpretations taken.
+    #[serde(default)]
+    pub notes: String,
+    /// Edge of one grid cell, mm (the paper: 100).
+    pub cell_mm: f64,
+    /// The cells the terminal may occupy; a move out of them is a collision.
+    pub bounds: Bounds,
+    /// (x_0, y_0, z_0): the terminal's start cell.
+    pub start: Cell,
+    /// (x_tag, y_tag, z_tag): the target cell.
+    pub target: Cell,
+    /// Obstacle cells: unit cubes centred on these cells.
+    pub obstacles: Vec<Cell>,
+    /// d_s (eq. 5): the terminal collides when its distance to an obstacle centre is <= this, cells.
+    pub terminal_safe_distance: f64,
+    /// d_p (eq. 11): every arm segment must stay farther than this from every obstacle centre, cells.
+    pub arm_safe_distance: f64,
+    /// Reward parameters.
+    #[serde(default)]
+    pub rewards: Rewards,
+    /// Learning parameters.
+    #[serde(default)]
+    pub learning: Learning,
+    /// The arm.
+    #[serde(default)]
+    pub arm: ArmSpec,
+    /// Pose planning parameters.
+    #[serde(default)]
+    pub planning: Planning,
+}
+
+fn fmt_cell(c: Cell) -> String {
+    format!("[{}, {}, {}]", c[0], c[1], c[2])
+}
+
+impl Scenario {
+    /// Load a scenario by file path, or by built-in name (`paper_simple`, ...).
+    /// A name ending in `.json` or containing a path separator is always read as a file.
+    pub fn load(name_or_path: &str) -> Result<Scenario> {
+        let path = Path::new(name_or_path);
+        if path.is_file() {
+            return Scenario::from_file(path);
+        }
+        if let Some(text) = builtin_text(name_or_path) {
+            return Scenario::from_json(text);
+        }
+        if name_or_path.ends_with(".json") || name_or_path.contains(std::path::MAIN_SEPARATOR) {
+            // Reading it gives the precise I/O error (missing file, permission, ...).
+            return Scenario::from_file(path);
+        }
+        Err(Error::ScenarioNotFound {
+            name: name_or_path.to_string(),
+            known: BUILTIN_NAMES.join(", "),
+        })
+    }
+
+    /// A built-in scenario by name.
+    pub fn builtin(name: &str) -> Result<Scenario> {
+        match builtin_text(name) {
+            Some(t) => Scenario::from_json(t),
+            None => Err(Error::ScenarioNotFound {
+                name: name.to_string(),
+                known: BUILTIN_NAMES.join(", "),
+            }),
+        }
+    }
+
+    /// Read and validate a scenario file.
+    pub fn from_file(path: &Path) -> Result<Scenario> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Scenario::from_json(&text)
+    }
+
+    /// Parse and validate scenario JSON.
+    pub fn from_json(text: &str) -> Result<Scenario> {
+        let s: Scenario =
+            serde_json::from_str(text).map_err(|e| Error::ScenarioParse(e.to_string()))?;
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Pretty JSON text of the scenario.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a scenario always serialises")
+    }
+
+    /// The kinematic arm of this scenario.
+    pub fn arm(&self) -> Arm {
+        self.arm.arm()
+    }
+
+    /// Position of a cell's centre, mm.
+    pub fn cell_centre_mm(&self, c: Cell) -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64) * self.cell_mm
+    }
+
+    /// Check every field; the error names the field and the value.
+    pub fn validate(&self) -> Result<()> {
+        fn finite_pos(field: &str, v: f64, allow_zero: bool) -> Result<()> {
+            if !v.is_finite() || v < 0.0 || (!allow_zero && v == 0.0) {
+                let what = if allow_zero {
+                    "must be a finite number >= 0"
+                } else {
+                    "must be a finite number > 0"
+                };
+                return Err(Error::invalid(field, v, what));
+            }
+            Ok(())
+        }
+        if self.name.trim().is_empty() {
+            return Err(Error::invalid("name", "\"\"", "must not be empty"));
+        }
+        finite_pos("cell_mm", self.cell_mm, false)?;
+        let b = &self.bounds;
+        for i in 0..3 {
+            if b.min[i] > b.max[i] {
+                return Err(Error::invalid(
+                    "bounds",
+                    format!("min {} max {}", fmt_cell(b.min), fmt_cell(b.max)),
+                    format!("empty along axis {}: min > max", ["x", "y", "z"][i]),
+                ));
+            }
+        }
+        if b.volume() > 1 << 24 {
+            return Err(Error::invalid(
+                "bounds",
+                format!("min {} max {}", fmt_cell(b.min), fmt_cell(b.max)),
+                "more than 16,777,216 cells",
+            ));
+        }
+        for (field, c) in [("start", self.start), ("target", self.target)] {
+            if !b.contains(c) {
+                return Err(Error::invalid(field, fmt_cell(c), "lies outside bounds"));
+            }
+            if self.obstacles.contains(&c) {
+                return Err(Error::invalid(
+                    field,
+                    fmt_cell(c),
+                    "lies inside an obstacle",
+                ));
+            }
+        }
+        if self.start == self.target {
+            return Err(Error::invalid(
+                "target",
+                fmt_cell(self.target),
+                "equals the start cell",
+            ));
+        }
+        finite_pos("terminal_safe_distance", self.terminal_safe_distance, true)?;
+        finite_pos("arm_safe_distance", self.arm_safe_distance, true)?;
+        // A terminal threshold of 1 or more would make the terminal collide with every
+        // free neighbour of an obstacle, and the start/target checks below rely on < 1.
+        if self.terminal_safe_distance >= 1.0 {
+            return Err(Error::invalid(
+                "terminal_safe_distance",
+                self.terminal_safe_distance,
+                "must be < 1 cell (obstacles are unit cubes on integer cells)",
+            ));
+        }
+        let r = &self.rewards;
+        for (f, v) in [
+            ("rewards.target_reward", r.target_reward),
+            ("rewards.step_penalty", r.step_penalty),
+            ("rewards.collision_penalty", r.collision_penalty),
+            (
+                "rewards.repeat_collision_penalty",
+                r.repeat_collision_penalty,
+            ),
+            (
+                "rewards.reverse_after_collision_penalty",
+                r.reverse_after_collision_penalty,
+            ),
+            ("rewards.distance_reward", r.distance_reward),
+        ] {
+            finite_pos(f, v, true)?;
+        }
+        let l = &self.learning;
+        if !(l.alpha > 0.0 && l.alpha <= 1.0) {
+            return Err(Error::invalid(
+                "learning.alpha",
+                l.alpha,
+                "must be in (0, 1]",
+            ));
+        }
+        if !(0.0..=1.0).contains(&l.gamma) {
+            return Err(Error::invalid(
+                "learning.gamma",
+                l.gamma,
+                "must be in [0, 1]",
+            ));
+        }
+        if !(0.0..=1.0).contains(&l.epsilon_start) {
+            return Err(Error::invalid(
+                "learning.epsilon_start",
+                l.epsilon_start,
+                "must be in [0, 1]",
+            ));
+        }
+        if l.episodes == 0 {
+            return Err(Error::invalid("learning.episodes", 0, "must be > 0"));
+        }
+        if l.max_steps_per_episode == 0 {
+            return Err(Error::invalid(
+                "learning.max_steps_per_episode",
+                0,
+                "must be > 0",
+            ));
+        }
+        let a = &self.arm;
+        if a.dh.len() != 6 {
+            return Err(Error::invalid(
+                "arm.dh",
+                format!("{} rows", a.dh.len()),
+                "must have exactly 6 rows",
+            ));
+        }
+        for (i, row) in a.dh.iter().enumerate() {
+            for (n, v) in [
+                ("alpha_deg", row.alpha_deg),
+                ("a_mm", row.a_mm),
+                ("d_mm", row.d_mm),
+                ("offset_deg", row.offset_deg),
+            ] {
+                if !v.is_finite() {
+                    return Err(Error::invalid(
+                        format!("arm.dh[{i}].{n}"),
+                        v,
+                        "must be finite",
+                    ));
+                }
+            }
+        }
+        for (i, v) in a.beta0_deg.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(Error::invalid(
+                    format!("arm.beta0_deg[{i}]"),
+                    v,
+                    "must be finite",
+                ));
+            }
+        }
+        if let Some(lims) = &a.joint_limits_deg {
+            for (i, [lo, hi]) in lims.iter().enumerate() {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(Error::invalid(
+                        format!("arm.joint_limits_deg[{i}]"),
+                        format!("[{lo}, {hi}]"),
+                        "must be finite with low < high",
+                    ));
+                }
+            }
+        }
+        let arm = self.arm();
+        let reached = arm.fk(&a.beta0_rad()).position_mm;
+        let start_mm = self.cell_centre_mm(self.start);
+        let miss = (reached - start_mm).norm();
+        if miss.is_nan() || miss > 1.0 {
+            return Err(Error::invalid(
+                "arm.beta0_deg",
+                format!("{:?}", a.beta0_deg),
+                format!(
+                    "its forward kinematics reaches ({:.1}, {:.1}, {:.1}) mm, {:.1} mm from the start cell's centre (at most 1 mm allowed)",
+                    reached.x, reached.y, reached.z, miss
+                ),
+            ));
+        }
+        let p = &self.planning;
+        if p.interpolation_steps == 0 {
+            return Err(Error::invalid(
+                "planning.interpolation_steps",
+                0,
+                "must be > 0",
+            ));
+        }
+        if p.orientation_divisions == 0 || p.orientation_divisions > 72 {
+            return Err(Error::invalid(
+                "planning.orientation_divisions",
+                p.orientation_divisions,
+                "must be in 1..=72",
+            ));
+        }
+        if let ClearanceModel::Capsules {
+            link_radius_mm,
+            margin_mm,
+        } = p.clearance_model
+        {
+            finite_pos(
+                "planning.clearance_model.link_radius_mm",
+                link_radius_mm,
+                true,
+            )?;
+            finite_pos("planning.clearance_model.margin_mm", margin_mm, true)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_load_and_roundtrip() {
+        for name in BUILTIN_NAMES {
+            let s = Scenario::builtin(name).unwrap();
+            let again = Scenario::from_json(&s.to_json()).unwrap();
+            assert_eq!(s, again);
+        }
+    }
+
+    #[test]
+    fn paper_simple_matches_table_1() {
+        let s = Scenario::builtin("paper_simple").unwrap();
+        assert_eq!(s.start, [0, -2, 4]);
+        assert_eq!(s.target, [0, 3, 0]);
+        assert_eq!(s.obstacles.len(), 19);
+        assert_eq!(s.terminal_safe_distance, 0.96);
+        assert_eq!(s.arm_safe_distance, 0.76);
+        assert_eq!(s.rewards, Rewards::default());
+        assert_eq!(s.cell_mm, 100.0);
+        let c = Scenario::builtin("paper_complex").unwrap();
+        assert_eq!(c.obstacles, s.obstacles);
+        assert_eq!(c.terminal_safe_distance, 0.95);
+        assert_eq!(c.arm_safe_distance, 0.85);
+    }
+}
