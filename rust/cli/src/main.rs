@@ -1,4 +1,168 @@
-//! The `sixaxis` command.
-fn main() {
-    println!("sixaxis: under construction");
+//! The `sixaxis` command: kinematics, scenario validation, training, planning and the
+//! paper's experiments, with JSON on stdout or to `--out FILE` (written atomically).
+//!
+//! Errors go to stderr with exit code 2 (bad input) or 1 (a run that failed), never a
+//! panic backtrace.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use serde_json::{json, Value};
+use sixaxis_core::kinematics::{rotation_from_rpy_deg, Arm};
+use sixaxis_core::{Error, Scenario, TerminalPose};
+
+mod list;
+
+/// Six-axis arm path planning with Q-learning and whole-arm obstacle avoidance.
+#[derive(Parser, Debug)]
+#[command(name = "sixaxis", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Where a command's JSON goes.
+#[derive(Args, Debug, Clone)]
+struct OutArgs {
+    /// Write the JSON to this file (atomically) instead of stdout.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Forward kinematics of the paper's arm.
+    ///
+    /// Example: sixaxis fk --joints-deg 57.9948,-10.1070,-132.9377,53.0502,90.0002,32.0054
+    Fk {
+        /// Six joint angles, degrees, comma-separated (may start with a minus sign).
+        #[arg(long, value_name = "A,B,C,D,E,F", allow_hyphen_values = true)]
+        joints_deg: String,
+        /// Use the arm of this scenario (name or file) instead of the paper's.
+        #[arg(long, value_name = "NAME_OR_FILE")]
+        scenario: Option<String>,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+    /// Inverse kinematics: every closed-form solution (up to 8) for a terminal pose.
+    ///
+    /// Example: sixaxis ik --position-mm 0,-200,400 --rpy-deg 0,0,0
+    Ik {
+        /// Terminal position x,y,z in mm.
+        #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+        position_mm: String,
+        /// Terminal orientation rt_x,rt_y,rt_z in degrees, R = Rz(rt_z) Ry(rt_y) Rx(rt_x).
+        #[arg(long, value_name = "RX,RY,RZ", allow_hyphen_values = true, default_value = "0,0,0")]
+        rpy_deg: String,
+        /// Use the arm of this scenario (name or file) instead of the paper's.
+        #[arg(long, value_name = "NAME_OR_FILE")]
+        scenario: Option<String>,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+    /// Check a scenario file (or built-in name) and print it back with every default filled in.
+    ///
+    /// Example: sixaxis validate envs/paper_simple.json
+    Validate {
+        /// Scenario file or built-in name (paper_simple, paper_complex, replan_shelf).
+        scenario: String,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+}
+
+/// A failure that ends the command: bad input (exit 2) or a run that did not succeed (exit 1).
+enum Failure {
+    Input(Error),
+    Run(String),
+}
+
+impl From<Error> for Failure {
+    fn from(e: Error) -> Self {
+        Failure::Input(e)
+    }
+}
+
+fn arm_of(scenario: &Option<String>) -> Result<Arm, Failure> {
+    Ok(match scenario {
+        Some(s) => Scenario::load(s)?.arm(),
+        None => Arm::paper(),
+    })
+}
+
+fn emit(value: &Value, out: &OutArgs) -> Result<(), Failure> {
+    let text = serde_json::to_string_pretty(value).expect("JSON values always serialise") + "\n";
+    match &out.out {
+        Some(path) => sixaxis_core::io::write_atomic(path, text.as_bytes())?,
+        None => print!("{text}"),
+    }
+    Ok(())
+}
+
+fn mat_rows(m: &nalgebra::Matrix3<f64>) -> Value {
+    json!((0..3)
+        .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<_>>())
+        .collect::<Vec<_>>())
+}
+
+fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Fk {
+            joints_deg,
+            scenario,
+            out,
+        } => {
+            let q = list::parse_fixed::<6>("--joints-deg", &joints_deg)?.map(f64::to_radians);
+            let arm = arm_of(&scenario)?;
+            let pose = arm.fk(&q);
+            let pts = arm.points_mm(&q);
+            emit(
+                &json!({
+                    "position_mm": [pose.position_mm.x, pose.position_mm.y, pose.position_mm.z],
+                    "rotation": mat_rows(&pose.rotation),
+                    "points_mm": pts.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>(),
+                }),
+                &out,
+            )
+        }
+        Command::Ik {
+            position_mm,
+            rpy_deg,
+            scenario,
+            out,
+        } => {
+            let p = list::parse_fixed::<3>("--position-mm", &position_mm)?;
+            let rpy = list::parse_fixed::<3>("--rpy-deg", &rpy_deg)?;
+            let arm = arm_of(&scenario)?;
+            let target = TerminalPose {
+                position_mm: nalgebra::Vector3::from(p),
+                rotation: rotation_from_rpy_deg(rpy),
+            };
+            let sols = arm.ik(&target);
+            emit(
+                &json!({ "solutions_rad": sols.iter().map(|q| q.to_vec()).collect::<Vec<_>>() }),
+                &out,
+            )
+        }
+        Command::Validate { scenario, out } => {
+            let s = Scenario::load(&scenario)?;
+            emit(&serde_json::to_value(&s).expect("scenarios serialise"), &out)
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Input(e)) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Run(msg)) => {
+            eprintln!("failed: {msg}");
+            ExitCode::from(1)
+        }
+    }
 }

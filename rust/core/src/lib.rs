@@ -8,11 +8,12 @@
 //! Modules, in the order the method uses them:
 //! - [`scenario`] — the world of one experiment, from JSON.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
-//! - [`error`] — the one error type.
+//! - [`error`] — the one error type; [`io`] — atomic file output.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 
 pub mod error;
+pub mod io;
 pub mod kinematics;
 pub mod scenario;
 

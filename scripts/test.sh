@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Every check and test: formatting, lints, Rust tests (unit, integration, doc), Python tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+# shellcheck disable=SC1091
+source .venv/bin/activate
+echo "== cargo fmt";    cargo fmt --all -- --check
+echo "== cargo clippy"; cargo clippy --workspace --all-targets --quiet -- -D warnings
+echo "== ruff";         ruff check python tests scripts && ruff format --check python tests scripts
+echo "== cargo test";   cargo test --workspace --release
+echo "== pytest";       python -m pytest tests -q
