@@ -1,0 +1,214 @@
+//! The integrated method (the paper's Algorithm 2): learn a terminal path, plan the arm's
+//! poses along it, and re-plan around every path point no safe pose reaches.
+//!
+//! Entry points:
+//! - [`plan`] — the whole loop for a scenario; returns a [`PlanResult`] (success or a
+//!   clear failure naming the points that could not be reached).
+//! - [`PlanOptions`] — seed, episodes and assistance, defaulting to the scenario's.
+//!
+//! Each round learns a path from scratch (a fresh Q-table) on the scenario's obstacles plus
+//! every point added so far, then runs Algorithm 1 ([`crate::planner::PosePlanner`]) from
+//! beta_0. A blocked point is added as an obstacle for the terminal only: the arm's
+//! clearance is always measured against the scenario's own obstacles.
+//!
+//! ```no_run
+//! use sixaxis_core::{replanning::{plan, PlanOptions}, Scenario};
+//! let s = Scenario::load("paper_simple").unwrap();
+//! let result = plan(&s, &PlanOptions::from_scenario(&s), None).unwrap();
+//! assert!(result.success);
+//! ```
+
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::grid::GridWorld;
+use crate::planner::{PosePlan, PosePlanner};
+use crate::qlearning::{train, TrainOptions};
+use crate::scenario::{Cell, ClearanceModel, Scenario};
+
+/// Options of one Algorithm 2 run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanOptions {
+    /// Learning options of every round (episodes, seed, assistance, ...).
+    pub train: TrainOptions,
+    /// Re-plans allowed before giving up.
+    pub max_replans: u32,
+}
+
+impl PlanOptions {
+    /// The scenario's own settings.
+    pub fn from_scenario(s: &Scenario) -> Self {
+        PlanOptions {
+            train: TrainOptions::from_scenario(s),
+            max_replans: s.planning.max_replans,
+        }
+    }
+}
+
+/// Learning figures of one round of Algorithm 2.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RoundSummary {
+    /// Obstacles added before this round (cumulative count).
+    pub added_obstacles: usize,
+    /// The learned path, if it reached the target.
+    pub path: Option<Vec<Cell>>,
+    /// First episode from which the greedy path no longer changed.
+    pub converged_episode: Option<u32>,
+    /// Environment steps of this round's learning.
+    pub total_steps: u64,
+    /// Wall time of this round's learning, seconds.
+    pub learning_time_s: f64,
+    /// Where Algorithm 1 stopped, if it did: (index in the path, cell).
+    pub blocked_at: Option<(usize, Cell)>,
+}
+
+/// The result of [`plan`]; serialises to the JSON of `sixaxis plan` (SPEC section 3).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanResult {
+    /// Whether every path point got a safe pose.
+    pub success: bool,
+    /// Edge of a cell, mm.
+    pub cell_mm: f64,
+    /// d_p, cells.
+    pub arm_safe_distance: f64,
+    /// Clearance model used for the arm.
+    pub clearance_model: ClearanceModel,
+    /// t: interpolation steps between poses.
+    pub interpolation_steps: u32,
+    /// Start and target cells.
+    pub start: Cell,
+    /// Target cell.
+    pub target: Cell,
+    /// The scenario's own obstacles (before any were added).
+    pub obstacles: Vec<Cell>,
+    /// The final terminal path (cells, start to target); empty on failure before any path.
+    pub path: Vec<Cell>,
+    /// One pose per path point, start included, radians.
+    pub poses_rad: Vec<[f64; 6]>,
+    /// The terminal orientation (rt_x, rt_y, rt_z), degrees, chosen at each path point.
+    pub orientations_rpy_deg: Vec<[f64; 3]>,
+    /// Number of re-plans (rounds after the first).
+    pub replans: u32,
+    /// Points recorded as new obstacles, in order.
+    pub added_obstacles: Vec<Cell>,
+    /// None on success; otherwise why, naming the points that could not be reached.
+    pub failure: Option<String>,
+    /// Per-round learning figures.
+    pub rounds: Vec<RoundSummary>,
+    /// Seed of the learner.
+    pub seed: u64,
+    /// Wall time of the whole run, seconds.
+    pub wall_time_s: f64,
+}
+
+fn fmt_cells(cells: &[Cell]) -> String {
+    let parts: Vec<String> = cells
+        .iter()
+        .map(|c| format!("({}, {}, {})", c[0], c[1], c[2]))
+        .collect();
+    parts.join(", ")
+}
+
+/// Run Algorithm 2 on a scenario. `progress(round, episodes_done)` is called during learning.
+///
+/// Errors only for invalid input; a plan that cannot be completed is `Ok` with
+/// `success == false` and a `failure` reason.
+pub fn plan(
+    scenario: &Scenario,
+    opts: &PlanOptions,
+    progress: Option<&dyn Fn(u32, u32)>,
+) -> Result<PlanResult> {
+    let t0 = Instant::now();
+    let planner = PosePlanner::from_scenario(scenario);
+    let beta0 = scenario.arm.beta0_rad();
+    let mut result = PlanResult {
+        success: false,
+        cell_mm: scenario.cell_mm,
+        arm_safe_distance: scenario.arm_safe_distance,
+        clearance_model: scenario.planning.clearance_model,
+        interpolation_steps: scenario.planning.interpolation_steps,
+        start: scenario.start,
+        target: scenario.target,
+        obstacles: scenario.obstacles.clone(),
+        path: Vec::new(),
+        poses_rad: Vec::new(),
+        orientations_rpy_deg: Vec::new(),
+        replans: 0,
+        added_obstacles: Vec::new(),
+        failure: None,
+        rounds: Vec::new(),
+        seed: opts.train.seed,
+        wall_time_s: 0.0,
+    };
+    let finish = |mut r: PlanResult, failure: Option<String>| {
+        r.success = failure.is_none();
+        r.failure = failure;
+        r.wall_time_s = t0.elapsed().as_secs_f64();
+        r
+    };
+    let mut round: u32 = 0;
+    loop {
+        let world = GridWorld::with_extra_obstacles(scenario, &result.added_obstacles)?;
+        if world.shortest_path().is_none() {
+            let why = format!(
+                "the target is cut off from the start once the points no arm pose reaches are obstacles; points that could not be reached: {}",
+                fmt_cells(&result.added_obstacles)
+            );
+            return Ok(finish(result, Some(why)));
+        }
+        let cb = progress.map(|p| move |done: u32| p(round, done));
+        let cb_ref: Option<&dyn Fn(u32)> = cb.as_ref().map(|f| f as &dyn Fn(u32));
+        let learned = train(&world, &opts.train, None, cb_ref)?;
+        let mut summary = RoundSummary {
+            added_obstacles: result.added_obstacles.len(),
+            path: learned.path.clone(),
+            converged_episode: learned.converged_episode,
+            total_steps: learned.total_steps,
+            learning_time_s: learned.wall_time_s,
+            blocked_at: None,
+        };
+        let Some(path) = learned.path else {
+            result.rounds.push(summary);
+            let why = format!(
+                "the learned greedy path does not reach the target after {} episodes (round {round}, seed {})",
+                opts.train.episodes, opts.train.seed
+            );
+            return Ok(finish(result, Some(why)));
+        };
+        match planner.plan_poses(&path, &beta0) {
+            PosePlan::Complete(points) => {
+                result.rounds.push(summary);
+                result.path = path;
+                result.poses_rad = points.iter().map(|p| p.joints_rad).collect();
+                result.orientations_rpy_deg =
+                    points.iter().map(|p| p.orientation_rpy_deg).collect();
+                return Ok(finish(result, None));
+            }
+            PosePlan::Blocked { index, cell, .. } => {
+                summary.blocked_at = Some((index, cell));
+                result.rounds.push(summary);
+                result.path = path;
+                result.added_obstacles.push(cell);
+                if cell == scenario.target {
+                    let why = format!(
+                        "no arm pose reaches the target ({}, {}, {}) with clearance > {} cells",
+                        cell[0], cell[1], cell[2], scenario.arm_safe_distance
+                    );
+                    return Ok(finish(result, Some(why)));
+                }
+                if round >= opts.max_replans {
+                    let why = format!(
+                        "re-plan cap ({}) reached; points that could not be reached: {}",
+                        opts.max_replans,
+                        fmt_cells(&result.added_obstacles)
+                    );
+                    return Ok(finish(result, Some(why)));
+                }
+                round += 1;
+                result.replans = round;
+            }
+        }
+    }
+}
