@@ -12,7 +12,10 @@ use serde_json::{json, Value};
 use sixaxis_core::kinematics::{rotation_from_rpy_deg, Arm};
 use sixaxis_core::{Error, Scenario, TerminalPose};
 
+mod learn;
 mod list;
+mod progress;
+mod reproduce;
 
 /// Six-axis arm path planning with Q-learning and whole-arm obstacle avoidance.
 #[derive(Parser, Debug)]
@@ -67,6 +70,35 @@ enum Command {
     Validate {
         /// Scenario file or built-in name (paper_simple, paper_complex, replan_shelf).
         scenario: String,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+    /// Learn a terminal path with tabular Q-learning (eqs. 5-10).
+    ///
+    /// Example: sixaxis train --scenario paper_simple --seed 0 --no-assist --out run.json
+    Train {
+        #[command(flatten)]
+        args: learn::TrainArgs,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+    /// Learn a path, plan the arm's poses, re-plan around unreachable points (Algorithm 2).
+    ///
+    /// Exit code 1 (and the JSON with "success": false and a "failure" reason) when no plan is found.
+    ///
+    /// Example: sixaxis plan --scenario paper_complex --seed 0 --out plan.json
+    Plan {
+        #[command(flatten)]
+        args: learn::PlanArgs,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+    /// Run the paper's experiments: JSON, figures and docs/REPRODUCTION.md.
+    ///
+    /// Example: sixaxis reproduce --seeds 10 --out-dir results/reproduce
+    Reproduce {
+        #[command(flatten)]
+        args: reproduce::ReproduceArgs,
         #[command(flatten)]
         out: OutArgs,
     },
@@ -149,6 +181,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let s = Scenario::load(&scenario)?;
             emit(&serde_json::to_value(&s).expect("scenarios serialise"), &out)
         }
+        Command::Train { args, out } => emit(&learn::run_train(&args)?, &out),
+        Command::Plan { args, out } => {
+            let r = learn::run_plan(&args)?;
+            emit(&serde_json::to_value(&r).expect("plan results serialise"), &out)?;
+            match r.failure {
+                Some(why) => Err(Failure::Run(why)),
+                None => Ok(()),
+            }
+        }
+        Command::Reproduce { args, out } => emit(&reproduce::run(&args)?, &out),
     }
 }
 
