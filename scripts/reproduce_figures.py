@@ -18,16 +18,28 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 
 def parse_args() -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--results", type=Path, default=Path("results/reproduce/reproduction.json"))
+    p.add_argument(
+        "--results", type=Path, default=Path("results/reproduce/reproduction.json")
+    )
     p.add_argument("--out-dir", type=Path, default=Path("results/reproduce"))
-    p.add_argument("--docs-dir", type=Path, default=Path("docs/figures"), help="copies for the docs; '' to skip")
-    p.add_argument("--smooth", type=int, default=50, help="moving-average window of the step curves, episodes")
+    p.add_argument(
+        "--docs-dir",
+        type=Path,
+        default=Path("docs/figures"),
+        help="copies for the docs; '' to skip",
+    )
+    p.add_argument(
+        "--smooth",
+        type=int,
+        default=50,
+        help="moving-average window of the step curves, episodes",
+    )
     p.add_argument("--dpi", type=int, default=110)
     return p.parse_args()
 
@@ -47,13 +59,27 @@ def draw_cubes(ax, cells, color, alpha=0.35, size=1.0):
     faces = []
     for x, y, z in cells:
         c = np.array(
-            [[x + dx, y + dy, z + dz] for dx in (-h, h) for dy in (-h, h) for dz in (-h, h)]
+            [
+                [x + dx, y + dy, z + dz]
+                for dx in (-h, h)
+                for dy in (-h, h)
+                for dz in (-h, h)
+            ]
         )
-        idx = [[0, 1, 3, 2], [4, 5, 7, 6], [0, 1, 5, 4], [2, 3, 7, 6], [0, 2, 6, 4], [1, 3, 7, 5]]
+        idx = [
+            [0, 1, 3, 2],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 3, 7, 6],
+            [0, 2, 6, 4],
+            [1, 3, 7, 5],
+        ]
         faces.extend([c[i] for i in idx])
     if faces:
         ax.add_collection3d(
-            Poly3DCollection(faces, facecolors=color, edgecolors="k", linewidths=0.2, alpha=alpha)
+            Poly3DCollection(
+                faces, facecolors=color, edgecolors="k", linewidths=0.2, alpha=alpha
+            )
         )
 
 
@@ -68,16 +94,32 @@ def frame_scene(ax, s):
     ax.set_box_aspect(hi - lo + 1)
     draw_cubes(ax, s["obstacles"], "0.15")
     ax.scatter(*s["start"], color="red", s=60, label="start", depthshade=False)
-    ax.scatter(*s["target"], color="gold", edgecolors="k", s=90, label="target", depthshade=False)
+    ax.scatter(
+        *s["target"],
+        color="gold",
+        edgecolors="k",
+        s=90,
+        label="target",
+        depthshade=False,
+    )
 
 
 def fig_steps(s, smooth, path, dpi):
     fig, ax = plt.subplots(figsize=(7, 4))
-    for key, label, color in (("unassisted", "without assisted learning", "tab:blue"), ("assisted", "with assisted learning", "black")):
+    for key, label, color in (
+        ("unassisted", "without assisted learning", "tab:blue"),
+        ("assisted", "with assisted learning", "black"),
+    ):
         curve = np.asarray(s[key]["mean_steps_per_episode"], dtype=float)
         ax.plot(np.arange(len(curve)), curve, color=color, alpha=0.15, lw=0.5)
         sm = moving_average(curve, smooth)
-        ax.plot(np.arange(len(sm)) + (len(curve) - len(sm)), sm, color=color, lw=1.4, label=label)
+        ax.plot(
+            np.arange(len(sm)) + (len(curve) - len(sm)),
+            sm,
+            color=color,
+            lw=1.4,
+            label=label,
+        )
     ax.set_yscale("log")
     ax.set_xlabel("episode")
     ax.set_ylabel("steps per episode (mean over seeds)")
@@ -97,13 +139,30 @@ def fig_path(s, path, dpi):
     first = rounds[0]["path"] if rounds and rounds[0]["path"] else None
     if first:
         p = np.asarray(first)
-        ax.plot(p[:, 0], p[:, 1], p[:, 2], color="tab:blue", lw=2, label="first learned path")
+        ax.plot(
+            p[:, 0],
+            p[:, 1],
+            p[:, 2],
+            color="tab:blue",
+            lw=2,
+            label="first learned path",
+        )
     if plan["replans"] > 0 and plan["path"]:
         p = np.asarray(plan["path"])
-        ax.plot(p[:, 0], p[:, 1], p[:, 2], color="tab:green", lw=2, ls="--", label="re-planned path")
+        ax.plot(
+            p[:, 0],
+            p[:, 1],
+            p[:, 2],
+            color="tab:green",
+            lw=2,
+            ls="--",
+            label="re-planned path",
+        )
         draw_cubes(ax, plan["added_obstacles"], "tab:red", alpha=0.5, size=0.6)
     status = "ok" if plan["success"] else "FAILED"
-    ax.set_title(f"{s['name']}: terminal path (seed 0, {plan['replans']} re-plans, {status})")
+    ax.set_title(
+        f"{s['name']}: terminal path (seed 0, {plan['replans']} re-plans, {status})"
+    )
     ax.legend(loc="upper left")
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
@@ -121,10 +180,19 @@ def fig_poses(s, path, dpi):
     n = len(points)
     for i, pts in enumerate(points):
         p = np.asarray(pts) / cell
-        ax.plot(p[:, 0], p[:, 1], p[:, 2], "-o", color=cmap(i / max(n - 1, 1)), lw=1.5, ms=2)
+        ax.plot(
+            p[:, 0], p[:, 1], p[:, 2], "-o", color=cmap(i / max(n - 1, 1)), lw=1.5, ms=2
+        )
     if n:
         terminal = np.asarray([pts[-1] for pts in points]) / cell
-        ax.plot(terminal[:, 0], terminal[:, 1], terminal[:, 2], color="tab:red", lw=1, ls=":")
+        ax.plot(
+            terminal[:, 0],
+            terminal[:, 1],
+            terminal[:, 2],
+            color="tab:red",
+            lw=1,
+            ls=":",
+        )
     ax.set_title(f"{s['name']}: arm poses along the path ({n} poses, seed 0)")
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
