@@ -1,0 +1,169 @@
+"""Collect every speed figure of the project into one table, docs/PERFORMANCE.md.
+
+Runs the criterion benchmarks of the Rust core (forward and inverse kinematics, clearance,
+the Q-learner, Algorithm 2) and the Python environment benchmark (scripts/bench_env.py),
+then writes the medians beside their goals, with the machine they ran on. The raw figures
+go to --out as JSON.
+
+    python scripts/bench.py                       # full run (a few minutes)
+    python scripts/bench.py --quick               # shorter measurement times
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# Goals from the issues: (substring of a criterion id, goal in ns, what it measures).
+RUST_GOALS = [
+    ("fk", 100.0, "forward kinematics, one pose"),
+    ("ik", 1_000.0, "inverse kinematics, full solve (all solutions)"),
+    ("clearance", 200.0, "one pose's clearance against the paper's 19 obstacles"),
+    ("train", 100e6, "paper_simple, 10,000 episodes with assistance"),
+    ("plan", 500e6, "a whole Algorithm 2 run"),
+]
+
+
+def parse_args() -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument(
+        "--quick", action="store_true", help="short warm-up and measurement times"
+    )
+    p.add_argument("--skip-rust", action="store_true")
+    p.add_argument("--skip-python", action="store_true")
+    p.add_argument(
+        "--out", type=Path, default=ROOT / "results" / "bench" / "bench.json"
+    )
+    p.add_argument("--report", type=Path, default=ROOT / "docs" / "PERFORMANCE.md")
+    return p.parse_args()
+
+
+def machine() -> str:
+    cpu = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}, Python {platform.python_version()}"
+
+
+def run_rust(quick: bool) -> list[dict]:
+    extra = ["--warm-up-time", "1", "--measurement-time", "2"] if quick else []
+    subprocess.run(
+        ["cargo", "bench", "-p", "sixaxis-core", "--quiet", "--", *extra],
+        cwd=ROOT,
+        check=True,
+    )
+    rows = []
+    for est in sorted((ROOT / "target" / "criterion").glob("**/new/estimates.json")):
+        bench = json.loads((est.parent / "benchmark.json").read_text())
+        data = json.loads(est.read_text())
+        rows.append(
+            {
+                "id": bench["full_id"],
+                "median_ns": data["median"]["point_estimate"],
+                "throughput": bench.get("throughput"),
+            }
+        )
+    return rows
+
+
+def run_python(quick: bool) -> dict:
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "env.json"
+        cmd = [
+            sys.executable,
+            str(ROOT / "scripts" / "bench_env.py"),
+            "--out",
+            str(out),
+        ]
+        if quick:
+            cmd.append("--quick")
+        subprocess.run(cmd, cwd=ROOT, check=True)
+        return json.loads(out.read_text())
+
+
+def fmt_ns(ns: float) -> str:
+    if ns >= 1e6:
+        return f"{ns / 1e6:.2f} ms"
+    if ns >= 1e3:
+        return f"{ns / 1e3:.2f} µs"
+    return f"{ns:.1f} ns"
+
+
+def goal_of(bench_id: str):
+    lowered = bench_id.lower()
+    for key, goal, what in RUST_GOALS:
+        if lowered.split("/")[0].startswith(key) or f"/{key}" in lowered:
+            return goal, what
+    return None, ""
+
+
+def report(data: dict) -> str:
+    lines = [
+        "# Performance",
+        "",
+        f"Measured by `python scripts/bench.py{' --quick' if data['quick'] else ''}` on {data['machine']}.",
+        "Medians of criterion runs (Rust, release, one core) and of scripts/bench_env.py (Python).",
+        "Goals come from the issues; they are targets, not test assertions.",
+        "",
+    ]
+    if data.get("rust"):
+        lines += [
+            "## Rust core",
+            "",
+            "| benchmark | median | goal | met |",
+            "|---|---|---|---|",
+        ]
+        for row in data["rust"]:
+            goal, _ = goal_of(row["id"])
+            met = "—" if goal is None else ("yes" if row["median_ns"] <= goal else "no")
+            goal_s = "—" if goal is None else f"≤ {fmt_ns(goal)}"
+            lines.append(
+                f"| `{row['id']}` | {fmt_ns(row['median_ns'])} | {goal_s} | {met} |"
+            )
+        lines.append("")
+    if data.get("python"):
+        lines += [
+            "## Python environment",
+            "",
+            "```json",
+            json.dumps(data["python"], indent=2),
+            "```",
+            "",
+        ]
+    return "\n".join(lines) + "\n"
+
+
+def write_atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def main() -> None:
+    args = parse_args()
+    data = {"machine": machine(), "quick": args.quick}
+    if not args.skip_rust:
+        data["rust"] = run_rust(args.quick)
+    if not args.skip_python:
+        data["python"] = run_python(args.quick)
+    write_atomic(args.out, json.dumps(data, indent=2))
+    write_atomic(args.report, report(data))
+    print(f"wrote {args.out} and {args.report}")
+
+
+if __name__ == "__main__":
+    main()
