@@ -588,13 +588,11 @@ mod tests {
 
     #[test]
     fn opposite_pairs() {
-        for a in 0..6 {
+        for (a, m) in ACTIONS.iter().enumerate() {
             let o = opposite(a);
             assert_ne!(a, o);
             assert_eq!(opposite(o), a);
-            for i in 0..3 {
-                assert_eq!(ACTIONS[a][i], -ACTIONS[o][i]);
-            }
+            assert_eq!(m.map(|v| -v), ACTIONS[o]);
         }
     }
 

@@ -13,10 +13,12 @@
 //!   `epsilon = epsilon_start * (1 - eta / M)` for `eta <= M`, else 0
 //!   (`M = epsilon_decay_episodes`; `M = 0` means no exploration at all). With the paper's
 //!   M = 9900 and 10,000 episodes, episodes 9900..=9999 are purely greedy.
-//! - **Action selection** per step: if `epsilon > 0`, draw `u` uniform in [0, 1); if
-//!   `u < epsilon` take an action uniformly from all six. Otherwise take the greedy action;
-//!   when several actions share the maximal Q-value, one of them is drawn uniformly (a draw
-//!   is made only when there is a tie). All draws come from one
+//! - **Action selection** per step: if `epsilon > 0`, draw `k = next_u32()` and explore if
+//!   `k < ceil(epsilon * 2^32)` (that is `u < epsilon` for `u = k / 2^32` uniform in
+//!   [0, 1)): then take an action uniformly from all six (`random_range(0..6u32)`). Otherwise take the greedy action;
+//!   when several actions share the maximal Q-value, one of them is drawn uniformly
+//!   (`random_range(0..ties)` over the tied actions in index order; a draw is made only
+//!   when there is a tie). All draws come from one
 //!   `ChaCha8Rng::seed_from_u64(seed)` per call of [`train`], in this order, so a run is
 //!   fully determined by (world, options, initial Q-table).
 //! - **Episode end**: on reaching the target (terminal state: the update does not
@@ -62,7 +64,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use rand::{Rng, SeedableRng};
+use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -149,26 +151,48 @@ pub struct QTable {
 }
 
 /// Index of the largest value, lowest index on ties.
-#[inline]
+#[inline(always)]
 fn argmax_lowest(row: &[f64; NUM_ACTIONS]) -> usize {
-    let mut best = 0;
-    for a in 1..NUM_ACTIONS {
-        if row[a] > row[best] {
-            best = a;
-        }
-    }
-    best
+    max_mask(row).trailing_zeros() as usize
 }
 
-#[inline]
-fn row_max(row: &[f64; NUM_ACTIONS]) -> f64 {
-    let mut m = row[0];
-    for &v in &row[1..] {
-        if v > m {
-            m = v;
-        }
+/// Bit `a` set for every action of maximal value (branch-free).
+#[inline(always)]
+fn max_mask(row: &[f64; NUM_ACTIONS]) -> u32 {
+    mask_of(row, row_max(row))
+}
+
+/// Bit `a` set for every action whose value equals `m`.
+#[inline(always)]
+fn mask_of(row: &[f64; NUM_ACTIONS], m: f64) -> u32 {
+    let mut mask = 0u32;
+    for (i, &v) in row.iter().enumerate() {
+        mask |= ((v == m) as u32) << i;
     }
-    m
+    mask
+}
+
+/// Index of the `n`-th set bit (from 0, lowest first) of `mask`.
+#[inline]
+fn nth_set_bit(mut mask: u32, n: u32) -> usize {
+    for _ in 0..n {
+        mask &= mask - 1;
+    }
+    mask.trailing_zeros() as usize
+}
+
+#[inline(always)]
+fn row_max(row: &[f64; NUM_ACTIONS]) -> f64 {
+    // A tree (depth 3, not a chain of 5): the value is the same, the latency shorter.
+    let a = if row[1] > row[0] { row[1] } else { row[0] };
+    let b = if row[3] > row[2] { row[3] } else { row[2] };
+    let c = if row[5] > row[4] { row[5] } else { row[4] };
+    let ab = if b > a { b } else { a };
+    if c > ab {
+        c
+    } else {
+        ab
+    }
 }
 
 /// Eq. 6: `old + alpha * (reward + gamma * bootstrap - old)`.
@@ -581,35 +605,26 @@ fn train_impl(
     const NO_ACTION: usize = usize::MAX;
     let qr = &mut q.rows;
     for ep in 0..episodes {
-        let eps = opts.epsilon(ep);
+        // Explore when a uniform u32 is below epsilon * 2^32 (i.e. u < epsilon for
+        // u = k / 2^32 uniform in [0, 1)).
+        let explore_threshold = (opts.epsilon(ep) * 4_294_967_296.0).ceil() as u64;
         let mut s = start;
         let mut last_collided = NO_ACTION;
         let mut steps = 0u32;
         let mut reached = false;
         let mut dirty = rollout_every_episode;
+        // max_a Q(s, a), carried from the previous step's bootstrap when still valid.
+        let mut s_max = row_max(&qr[s]);
         while steps < max_steps {
             // Action selection (eq. 7).
-            let a = if eps > 0.0 && rng.random::<f64>() < eps {
+            let a = if explore_threshold > 0 && (rng.next_u32() as u64) < explore_threshold {
                 rng.random_range(0..NUM_ACTIONS as u32) as usize
             } else {
-                let row = &qr[s];
-                let mut best = row[0];
-                let mut ties = [0u8; NUM_ACTIONS];
-                let mut k = 1usize;
-                for (i, &v) in row.iter().enumerate().skip(1) {
-                    if v > best {
-                        best = v;
-                        ties[0] = i as u8;
-                        k = 1;
-                    } else if v == best {
-                        ties[k] = i as u8;
-                        k += 1;
-                    }
-                }
-                if k == 1 {
-                    ties[0] as usize
+                let mask = mask_of(&qr[s], s_max);
+                if mask & (mask - 1) == 0 {
+                    mask.trailing_zeros() as usize
                 } else {
-                    ties[rng.random_range(0..k as u32) as usize] as usize
+                    nth_set_bit(mask, rng.random_range(0..mask.count_ones()))
                 }
             };
             // Environment step (eqs. 5, 9, 10).
@@ -625,12 +640,15 @@ fn train_impl(
             }
             reached = ns == target && !collided;
             // Q-update (eq. 6).
-            let bootstrap = if reached { 0.0 } else { row_max(&qr[ns]) };
+            let next_max = row_max(&qr[ns]);
+            let bootstrap = if reached { 0.0 } else { next_max };
             let old = qr[s][a];
             qr[s][a] = updated(old, reward, bootstrap, alpha, gamma);
             if !dirty && stamp[s] == gen && argmax_lowest(&qr[s]) != act[s] as usize {
                 dirty = true;
             }
+            // On a collision ns == s and its row just changed; otherwise row ns is untouched.
+            s_max = if collided { row_max(&qr[s]) } else { next_max };
             last_collided = if collided { a } else { NO_ACTION };
             steps += 1;
             s = ns;
@@ -708,6 +726,10 @@ mod tests {
         assert_eq!(argmax_lowest(&[0.0, 1.0, 1.0, 0.0, 0.0, 0.0]), 1);
         assert_eq!(argmax_lowest(&[-1.0, -1.0, -1.0, -1.0, -1.0, -0.5]), 5);
         assert_eq!(row_max(&[-3.0, -2.0, -1.0, -4.0, -5.0, -6.0]), -1.0);
+        assert_eq!(max_mask(&[0.0, 1.0, 1.0, 0.0, 1.0, 0.0]), 0b10110);
+        assert_eq!(nth_set_bit(0b10110, 0), 1);
+        assert_eq!(nth_set_bit(0b10110, 1), 2);
+        assert_eq!(nth_set_bit(0b10110, 2), 4);
     }
 
     #[test]
