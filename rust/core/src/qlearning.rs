@@ -7,6 +7,18 @@
 //! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
 //! - [`QTable::save`] / [`QTable::load`] — atomic Q-table files, checked against the world.
 //!
+//! ```
+//! use sixaxis_core::grid::GridWorld;
+//! use sixaxis_core::qlearning::{train, TrainOptions};
+//! use sixaxis_core::Scenario;
+//! let s = Scenario::builtin("paper_simple").unwrap();
+//! let world = GridWorld::new(&s).unwrap();
+//! let mut opts = TrainOptions::from_scenario(&s); // the paper's 10,000 episodes ...
+//! opts.episodes = 200; // ... fewer here
+//! let r = train(&world, &opts, None, None).unwrap();
+//! assert_eq!(r.steps_per_episode.len(), 200);
+//! ```
+//!
 //! # Choices where the SPEC is silent
 //!
 //! - **Episodes are counted from 0**: episode `eta` in `0..episodes` explores with
@@ -36,7 +48,10 @@
 //!   compared with the path after the one before, ..., and with the path of the initial
 //!   Q-table for episode 0; if it never changed, the answer is 0. The learner recomputes
 //!   the greedy path only after an episode whose updates changed the greedy action of a
-//!   state the current rollout consults, which is exact and cheap.
+//!   state the current rollout consults, which is exact and cheap. Late changes are
+//!   usually swaps between equally short paths whose Q-values are still settling, so
+//!   [`TrainResult::length_converged_episode`] also reports the first episode from which
+//!   the path's length no longer changed.
 //! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
 //!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
 //!   epsilon schedule) count from 0 again, and the converged episode is an index of this
@@ -470,6 +485,9 @@ pub struct TrainResult {
     /// First episode (from 0) from which the greedy path no longer changed; `None` if the
     /// final path fails.
     pub converged_episode: Option<u32>,
+    /// First episode (from 0) from which the greedy path's *length* no longer changed
+    /// (later changes, if any, swap equally long paths); `None` if the final path fails.
+    pub length_converged_episode: Option<u32>,
     /// Environment steps over all episodes.
     pub total_steps: u64,
     /// Wall time of the call, seconds.
@@ -569,10 +587,16 @@ fn train_impl(
         None => QTable::zeros(n),
     };
 
-    // Reward of (s, a) without eq. 9, and eq. 9's two penalties.
+    // Rewards, computed exactly as `GridWorld::step` does: eq. 5 by kind of move
+    // (plain, collision, reaching), plus eq. 10 by new state, plus eq. 9.
     let assist = opts.assist;
-    let reward_table: Vec<[f64; NUM_ACTIONS]> = (0..n)
-        .map(|s| std::array::from_fn(|a| world.base_reward(s, a, assist)))
+    let rw = world.rewards();
+    let eq5 = [-rw.step_penalty, -rw.collision_penalty, rw.target_reward];
+    let distance = assist.distance;
+    let eq10: Vec<f64> = (0..n)
+        .map(|s| {
+            rw.distance_reward * (world.start_distance_cells() - world.distance_to_target_cells(s))
+        })
         .collect();
     let detour = assist.detour;
     let repeat_pen = -world.rewards().repeat_collision_penalty;
@@ -601,6 +625,7 @@ fn train_impl(
     );
     let mut new_path = Vec::new();
     let mut last_change = 0u32;
+    let mut last_length_change = 0u32;
 
     const NO_ACTION: usize = usize::MAX;
     let qr = &mut q.rows;
@@ -630,7 +655,11 @@ fn train_impl(
             // Environment step (eqs. 5, 9, 10).
             let ns = next[s][a] as usize;
             let collided = ns == s;
-            let mut reward = reward_table[s][a];
+            reached = ns == target && !collided;
+            let mut reward = eq5[collided as usize + 2 * reached as usize];
+            if distance {
+                reward += eq10[ns];
+            }
             if detour && last_collided != NO_ACTION {
                 if collided {
                     reward += repeat_pen;
@@ -638,7 +667,6 @@ fn train_impl(
                     reward += reverse_pen;
                 }
             }
-            reached = ns == target && !collided;
             // Q-update (eq. 6).
             let next_max = row_max(&qr[ns]);
             let bootstrap = if reached { 0.0 } else { next_max };
@@ -660,6 +688,10 @@ fn train_impl(
         steps_per_episode.push(steps);
         reached_per_episode.push(reached);
         if dirty {
+            if gen == u32::MAX {
+                stamp.fill(0);
+                gen = 0;
+            }
             gen += 1;
             let ok = rollout(
                 world,
@@ -673,6 +705,9 @@ fn train_impl(
             let same = ok == path_ok && (!ok || new_path == path);
             if !same {
                 last_change = ep;
+                if ok != path_ok || (ok && new_path.len() != path.len()) {
+                    last_length_change = ep;
+                }
             }
             std::mem::swap(&mut path, &mut new_path);
             path_ok = ok;
@@ -690,11 +725,13 @@ fn train_impl(
         None
     };
     let converged_episode = path_ok.then_some(last_change);
+    let length_converged_episode = path_ok.then_some(last_length_change);
     Ok(TrainResult {
         path: final_path,
         steps_per_episode,
         reached_per_episode,
         converged_episode,
+        length_converged_episode,
         total_steps,
         wall_time_s: started.elapsed().as_secs_f64(),
         q,

@@ -459,6 +459,7 @@ fn paper_simple_learns_a_path_with_default_10k_episodes() {
     assert_eq!(r.reached_per_episode.len(), 10_000);
     let conv = r.converged_episode.expect("a final path");
     assert!(conv < 10_000);
+    assert!(r.length_converged_episode.unwrap() <= conv);
     // The last, purely greedy episodes walk the learned path.
     assert!(r.reached_per_episode[9901..].iter().all(|&x| x));
     assert!(r.steps_per_episode[9901..]
@@ -519,9 +520,10 @@ fn report_seeds_0_to_4_on_paper_scenarios() {
                     assert!(r.path.is_some(), "{name} seed {seed}");
                 }
                 line += &format!(
-                    "seed {seed}: len {:?} conv {:?}; ",
+                    "seed {seed}: len {:?} conv {:?} (length {:?}); ",
                     r.path.as_ref().map(|p| p.len() - 1),
-                    r.converged_episode
+                    r.converged_episode,
+                    r.length_converged_episode
                 );
             }
             println!("{line}");
