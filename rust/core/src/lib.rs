@@ -13,9 +13,11 @@
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 
 pub mod error;
+pub mod ik;
 pub mod kinematics;
 pub mod scenario;
 
 pub use error::{Error, Result};
+pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use scenario::{Cell, Scenario};
