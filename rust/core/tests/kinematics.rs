@@ -429,6 +429,62 @@ fn orientation_grid_poses_all_valid() {
 }
 
 #[test]
+fn random_poses_give_only_valid_solutions() {
+    // Arbitrary poses (most not reachable), not made by FK: whatever comes back must be
+    // right, and some must come back.
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    for arm in [Arm::paper(), second_arm(), zero_d4_arm()] {
+        let (mut solved, mut n_sols) = (0, 0);
+        for i in 0..10_000 {
+            let position_mm = Vector3::from_fn(|_, _| 1600.0 * (rng.random::<f64>() - 0.5));
+            // Uniform random rotation: a unit quaternion by rejection sampling in the 4-ball.
+            let quat = loop {
+                let v = nalgebra::Vector4::from_fn(|_, _| 2.0 * rng.random::<f64>() - 1.0);
+                if v.norm() > 1e-3 && v.norm() <= 1.0 {
+                    break v.normalize();
+                }
+            };
+            let rotation = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                quat[0], quat[1], quat[2], quat[3],
+            ))
+            .to_rotation_matrix()
+            .into_inner();
+            let pose = TerminalPose {
+                position_mm,
+                rotation,
+            };
+            let sols = arm.ik(&pose);
+            assert_valid_solutions(&arm, &pose, &sols, &format!("random pose {i}"));
+            if !sols.is_empty() {
+                solved += 1;
+                n_sols += sols.len();
+            }
+        }
+        assert!(solved > 500, "only {solved} random poses solved");
+        assert!(n_sols > 2 * solved);
+    }
+}
+
+#[test]
+fn nearly_orthonormal_rotation_is_accepted_far_from_one_is_not() {
+    let arm = Arm::paper();
+    let q = [0.3, -1.0, 1.2, 0.4, 0.9, -0.7];
+    let exact = arm.fk(&q);
+    let mut slightly_off = exact;
+    slightly_off.rotation[(0, 1)] += 1e-8;
+    let sols = arm.ik(&slightly_off);
+    assert_eq!(sols.len(), 8);
+    for s in sols.iter() {
+        let f = arm.fk(s);
+        assert!((f.position_mm - exact.position_mm).norm() < 1e-4);
+        assert!((f.rotation - exact.rotation).amax() < 1e-6);
+    }
+    let mut far_off = exact;
+    far_off.rotation[(0, 1)] += 1e-3;
+    assert!(arm.ik(&far_off).is_empty());
+}
+
+#[test]
 fn unreachable_and_invalid_inputs_give_no_solution() {
     let arm = Arm::paper();
     let far = TerminalPose {
