@@ -10,6 +10,7 @@
 //! - [`grid`] — the terminal's grid world: actions, collisions, rewards (eqs. 5, 9, 10), BFS.
 //! - [`qlearning`] — tabular Q-learning (eqs. 6-8), learned path, Q-table files.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
+//! - [`ik`] — closed-form inverse kinematics, every solution (up to 8).
 //! - [`error`] — the one error type; [`io`] — atomic file output.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
@@ -17,12 +18,14 @@
 pub mod error;
 pub mod grid;
 pub mod io;
+pub mod ik;
 pub mod kinematics;
 pub mod qlearning;
 pub mod scenario;
 
 pub use error::{Error, Result};
 pub use grid::{Assist, GridWorld, Transition};
+pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
 pub use scenario::{Cell, Scenario};
