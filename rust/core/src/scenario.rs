@@ -456,6 +456,15 @@ impl Scenario {
                 }
             }
         }
+        let mut rows = PAPER_DH;
+        rows.copy_from_slice(&a.dh);
+        if let Err(why) = crate::ik::check_closed_form_family(&rows) {
+            return Err(Error::invalid(
+                "arm.dh",
+                "(table)",
+                format!("the closed-form inverse kinematics does not cover this table: {why}"),
+            ));
+        }
         for (i, v) in a.beta0_deg.iter().enumerate() {
             if !v.is_finite() {
                 return Err(Error::invalid(
