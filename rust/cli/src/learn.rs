@@ -84,7 +84,13 @@ pub struct TrainArgs {
 }
 
 /// JSON of a training run (shared with `reproduce`).
-pub fn train_json(s: &Scenario, world: &GridWorld, opts: &TrainOptions, r: &TrainResult, curve: bool) -> Value {
+pub fn train_json(
+    s: &Scenario,
+    world: &GridWorld,
+    opts: &TrainOptions,
+    r: &TrainResult,
+    curve: bool,
+) -> Value {
     let shortest = world.shortest_path().map(|p| p.len() - 1);
     let mut v = json!({
         "scenario": s.name,

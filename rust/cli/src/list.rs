@@ -18,7 +18,11 @@ pub fn parse_fixed<const N: usize>(flag: &str, text: &str) -> Result<[f64; N], E
             .parse()
             .map_err(|_| Error::argument(flag, text, format!("`{part}` is not a number")))?;
         if !v.is_finite() {
-            return Err(Error::argument(flag, text, format!("`{part}` is not finite")));
+            return Err(Error::argument(
+                flag,
+                text,
+                format!("`{part}` is not finite"),
+            ));
         }
         *slot = v;
     }
@@ -31,12 +35,17 @@ mod tests {
 
     #[test]
     fn parses_negative_numbers() {
-        assert_eq!(parse_fixed::<3>("--x", "-1, 2.5,-3").unwrap(), [-1.0, 2.5, -3.0]);
+        assert_eq!(
+            parse_fixed::<3>("--x", "-1, 2.5,-3").unwrap(),
+            [-1.0, 2.5, -3.0]
+        );
     }
 
     #[test]
     fn wrong_count_and_garbage_name_the_flag() {
-        let e = parse_fixed::<3>("--position-mm", "1,2").unwrap_err().to_string();
+        let e = parse_fixed::<3>("--position-mm", "1,2")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("--position-mm") && e.contains("1,2"), "{e}");
         let e = parse_fixed::<2>("--x", "1,abc").unwrap_err().to_string();
         assert!(e.contains("abc"), "{e}");

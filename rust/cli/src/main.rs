@@ -56,7 +56,12 @@ enum Command {
         #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
         position_mm: String,
         /// Terminal orientation rt_x,rt_y,rt_z in degrees, R = Rz(rt_z) Ry(rt_y) Rx(rt_x).
-        #[arg(long, value_name = "RX,RY,RZ", allow_hyphen_values = true, default_value = "0,0,0")]
+        #[arg(
+            long,
+            value_name = "RX,RY,RZ",
+            allow_hyphen_values = true,
+            default_value = "0,0,0"
+        )]
         rpy_deg: String,
         /// Use the arm of this scenario (name or file) instead of the paper's.
         #[arg(long, value_name = "NAME_OR_FILE")]
@@ -179,12 +184,18 @@ fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Validate { scenario, out } => {
             let s = Scenario::load(&scenario)?;
-            emit(&serde_json::to_value(&s).expect("scenarios serialise"), &out)
+            emit(
+                &serde_json::to_value(&s).expect("scenarios serialise"),
+                &out,
+            )
         }
         Command::Train { args, out } => emit(&learn::run_train(&args)?, &out),
         Command::Plan { args, out } => {
             let r = learn::run_plan(&args)?;
-            emit(&serde_json::to_value(&r).expect("plan results serialise"), &out)?;
+            emit(
+                &serde_json::to_value(&r).expect("plan results serialise"),
+                &out,
+            )?;
             match r.failure {
                 Some(why) => Err(Failure::Run(why)),
                 None => Ok(()),

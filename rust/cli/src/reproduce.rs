@@ -84,7 +84,11 @@ fn machine() -> String {
         })
         .unwrap_or_else(|| "unknown CPU".into());
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
-    format!("{cpu}, {cores} cores, {} {}", std::env::consts::OS, std::env::consts::ARCH)
+    format!(
+        "{cpu}, {cores} cores, {} {}",
+        std::env::consts::OS,
+        std::env::consts::ARCH
+    )
 }
 
 /// One learning condition over all seeds.
@@ -119,11 +123,23 @@ fn learn_condition(
         pb.inc(1);
     }
     let n = a.seeds.max(1) as f64;
-    let times: Vec<f64> = runs.iter().map(|r| r["wall_time_s"].as_f64().unwrap_or(f64::NAN)).collect();
-    let steps: Vec<f64> = runs.iter().map(|r| r["total_steps"].as_f64().unwrap_or(f64::NAN)).collect();
+    let times: Vec<f64> = runs
+        .iter()
+        .map(|r| r["wall_time_s"].as_f64().unwrap_or(f64::NAN))
+        .collect();
+    let steps: Vec<f64> = runs
+        .iter()
+        .map(|r| r["total_steps"].as_f64().unwrap_or(f64::NAN))
+        .collect();
     let reached = runs.iter().filter(|r| r["reached"] == json!(true)).count();
-    let lengths: Vec<f64> = runs.iter().filter_map(|r| r["path_length"].as_f64()).collect();
-    let conv: Vec<f64> = runs.iter().filter_map(|r| r["converged_episode"].as_f64()).collect();
+    let lengths: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r["path_length"].as_f64())
+        .collect();
+    let conv: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r["converged_episode"].as_f64())
+        .collect();
     Ok(json!({
         "assist": assist,
         "runs": runs,
@@ -165,8 +181,16 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
     if a.seeds == 0 {
         return Err(Error::argument("--seeds", 0, "must be > 0").into());
     }
-    let names: Vec<&str> = a.scenarios.split(',').map(str::trim).filter(|n| !n.is_empty()).collect();
-    let scenarios = names.iter().map(|n| Scenario::load(n)).collect::<Result<Vec<_>, _>>()?;
+    let names: Vec<&str> = a
+        .scenarios
+        .split(',')
+        .map(str::trim)
+        .filter(|n| !n.is_empty())
+        .collect();
+    let scenarios = names
+        .iter()
+        .map(|n| Scenario::load(n))
+        .collect::<Result<Vec<_>, _>>()?;
     let total = scenarios.len() as u64 * a.seeds * 3;
     let pb = progress::bar(total, "reproducing", a.quiet);
     let mut out = Vec::new();
@@ -243,7 +267,13 @@ fn draw_figures(a: &ReproduceArgs, json_path: &Path) -> Result<PathBuf, Failure>
         .arg("--out-dir")
         .arg(&a.out_dir)
         .status()
-        .map_err(|e| Failure::Run(format!("could not start `{} {}`: {e} (use --no-figures to skip the figures)", a.python, a.figures_script.display())))?;
+        .map_err(|e| {
+            Failure::Run(format!(
+                "could not start `{} {}`: {e} (use --no-figures to skip the figures)",
+                a.python,
+                a.figures_script.display()
+            ))
+        })?;
     if !status.success() {
         return Err(Failure::Run(format!(
             "the figure script `{}` failed ({status}); the JSON is in {}",
@@ -260,8 +290,12 @@ fn summary(result: &Value) -> Value {
         .into_iter()
         .flatten()
         .map(|s| {
-            let with = s["assisted"]["wall_time_s_mean"].as_f64().unwrap_or(f64::NAN);
-            let without = s["unassisted"]["wall_time_s_mean"].as_f64().unwrap_or(f64::NAN);
+            let with = s["assisted"]["wall_time_s_mean"]
+                .as_f64()
+                .unwrap_or(f64::NAN);
+            let without = s["unassisted"]["wall_time_s_mean"]
+                .as_f64()
+                .unwrap_or(f64::NAN);
             let plans = s["plans"].as_array().cloned().unwrap_or_default();
             json!({
                 "scenario": s["name"],
@@ -306,7 +340,11 @@ fn report(result: &Value, figures: Option<&Path>, json_path: &Path, a: &Reproduc
         let name = s["name"].as_str().unwrap_or("?");
         let paper = PAPER_TIMES_S.iter().find(|(n, _, _)| *n == name);
         let (pw, pa, pr) = match paper {
-            Some((_, w, wa)) => (format!("{w:.1}"), format!("{wa:.1}"), format!("{:.2}", w / wa)),
+            Some((_, w, wa)) => (
+                format!("{w:.1}"),
+                format!("{wa:.1}"),
+                format!("{:.2}", w / wa),
+            ),
             None => ("—".into(), "—".into(), "—".into()),
         };
         let ua = &s["unassisted"];
@@ -343,8 +381,14 @@ fn report(result: &Value, figures: Option<&Path>, json_path: &Path, a: &Reproduc
             );
         }
     }
-    let _ = writeln!(r, "\n## Pose planning and re-planning (Algorithm 2, with assistance)\n");
-    let _ = writeln!(r, "The paper needed one re-plan in the complex case and none in the simple case.\n");
+    let _ = writeln!(
+        r,
+        "\n## Pose planning and re-planning (Algorithm 2, with assistance)\n"
+    );
+    let _ = writeln!(
+        r,
+        "The paper needed one re-plan in the complex case and none in the simple case.\n"
+    );
     let _ = writeln!(r, "| scenario | d_p (cells) | plans succeeded | re-plans per seed | points added (seed 0) | failure (seed 0) |");
     let _ = writeln!(r, "|---|---|---|---|---|---|");
     for s in result["scenarios"].as_array().into_iter().flatten() {

@@ -17,8 +17,8 @@
 
 pub mod error;
 pub mod grid;
-pub mod io;
 pub mod ik;
+pub mod io;
 pub mod kinematics;
 pub mod qlearning;
 pub mod scenario;
