@@ -8,14 +8,17 @@
 //! Modules, in the order the method uses them:
 //! - [`scenario`] — the world of one experiment, from JSON.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
+//! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
 //! - [`error`] — the one error type.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 
+pub mod clearance;
 pub mod error;
 pub mod kinematics;
 pub mod scenario;
 
+pub use clearance::Clearance;
 pub use error::{Error, Result};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use scenario::{Cell, Scenario};
