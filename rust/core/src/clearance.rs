@@ -61,12 +61,12 @@ const FAR: f64 = 1.0e100;
 /// four (padding lies at `1e100` cells and never matters), so that the eq. 11 loop vectorises.
 #[derive(Debug, Clone)]
 pub struct Clearance {
-    /// Obstacle centre x, cells (padded).
-    xs: Vec<f64>,
-    /// Obstacle centre y, cells (padded).
-    ys: Vec<f64>,
-    /// Obstacle centre z, cells (padded).
-    zs: Vec<f64>,
+    /// Obstacle centre x, cells, in chunks of four (padded).
+    xs: Vec<[f64; LANES]>,
+    /// Obstacle centre y, cells, in chunks of four (padded).
+    ys: Vec<[f64; LANES]>,
+    /// Obstacle centre z, cells, in chunks of four (padded).
+    zs: Vec<[f64; LANES]>,
     /// Number of real obstacles.
     count: usize,
     /// Edge of a cell, mm.
@@ -75,6 +75,8 @@ pub struct Clearance {
     model: ClearanceModel,
     /// d_p, cells (centres model).
     arm_safe_distance_cells: f64,
+    /// Whether the CPU has AVX (x86_64): picks the 4-wide eq. 11 kernel.
+    avx: bool,
 }
 
 /// Distance from point `p` to segment `a`-`b` (eq. 11), in the unit of the inputs.
@@ -122,15 +124,13 @@ pub fn segment_point_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f6
 #[inline]
 pub fn interpolate(from: &Joints, to: &Joints, fraction: f64) -> Joints {
     let f = fraction.clamp(0.0, 1.0);
-    let mut out = [0.0; 6];
-    for i in 0..6 {
-        out[i] = if f == 1.0 {
+    std::array::from_fn(|i| {
+        if f == 1.0 {
             wrap_exact(to[i])
         } else {
             wrap_exact(from[i] + wrap_exact(to[i] - from[i]) * f)
-        };
-    }
-    out
+        }
+    })
 }
 
 /// [`wrap_angle`] that leaves an angle already in (-pi, pi] untouched (bit for bit;
@@ -154,7 +154,20 @@ struct Seg {
 }
 
 impl Seg {
-    #[inline]
+    /// Segment `k` (0..7) of the polyline, or `None` if it has zero length: its point is an
+    /// end of a neighbouring segment (the polyline is connected). `k = 7` stands for "every
+    /// segment has zero length" and is asked for only when no segment was used: then the
+    /// single point, once.
+    #[inline(always)]
+    fn pick(points: &ArmPoints, k: usize, scale: f64, used: bool) -> Option<Seg> {
+        if k == 7 {
+            return (!used).then(|| Seg::new(&points[0], &points[0], scale));
+        }
+        let s = Seg::new(&points[k], &points[k + 1], scale);
+        (s.inv_dd > 0.0).then_some(s)
+    }
+
+    #[inline(always)]
     fn new(a: &Vector3<f64>, b: &Vector3<f64>, scale: f64) -> Seg {
         let a = [a.x * scale, a.y * scale, a.z * scale];
         let d = [b.x * scale - a[0], b.y * scale - a[1], b.z * scale - a[2]];
@@ -208,6 +221,184 @@ fn capsule_cube_gap_mm(
     (segment_cube_distance_mm(&(a - c), &(b - c), half) - r).max(0.0)
 }
 
+/// Eq. 11 kernel, portable version: smallest squared distance (cells²) from the obstacle
+/// centres (chunks of four) to one segment. Same operations, in the same order, as the SSE2
+/// version, so both give the same bits.
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[allow(clippy::needless_range_loop)] // lanes of three arrays
+#[inline(always)]
+fn seg_min_d2_scalar(
+    xs: &[[f64; LANES]],
+    ys: &[[f64; LANES]],
+    zs: &[[f64; LANES]],
+    s: &Seg,
+) -> f64 {
+    let mut m = f64::INFINITY;
+    for ((xs, ys), zs) in xs.iter().zip(ys).zip(zs) {
+        for l in 0..LANES {
+            let px = xs[l] - s.a[0];
+            let py = ys[l] - s.a[1];
+            let pz = zs[l] - s.a[2];
+            let dot = px * s.d[0] + py * s.d[1] + pz * s.d[2];
+            let w = dot * s.inv_dd;
+            let w = if w > 0.0 { w } else { 0.0 };
+            let w = if w < 1.0 { w } else { 1.0 };
+            let ex = px - w * s.d[0];
+            let ey = py - w * s.d[1];
+            let ez = pz - w * s.d[2];
+            let d2 = ex * ex + ey * ey + ez * ez;
+            if d2 < m {
+                m = d2;
+            }
+        }
+    }
+    m
+}
+
+/// Eq. 11 kernel with SSE2 (part of the x86_64 baseline, so no run-time detection is
+/// needed): two obstacles per instruction.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn seg_min_d2_sse2(xs: &[[f64; LANES]], ys: &[[f64; LANES]], zs: &[[f64; LANES]], s: &Seg) -> f64 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is always available on x86_64; every load reads two f64 of a [f64; 4]
+    // at offset 0 or 2 (unaligned loads).
+    #[allow(unused_unsafe)]
+    unsafe {
+        let (ax, ay, az) = (
+            _mm_set1_pd(s.a[0]),
+            _mm_set1_pd(s.a[1]),
+            _mm_set1_pd(s.a[2]),
+        );
+        let (dx, dy, dz) = (
+            _mm_set1_pd(s.d[0]),
+            _mm_set1_pd(s.d[1]),
+            _mm_set1_pd(s.d[2]),
+        );
+        let inv = _mm_set1_pd(s.inv_dd);
+        let zero = _mm_setzero_pd();
+        let one = _mm_set1_pd(1.0);
+        let mut acc = _mm_set1_pd(f64::INFINITY);
+        for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
+            for half in [0usize, 2] {
+                let px = _mm_sub_pd(_mm_loadu_pd(x4.as_ptr().add(half)), ax);
+                let py = _mm_sub_pd(_mm_loadu_pd(y4.as_ptr().add(half)), ay);
+                let pz = _mm_sub_pd(_mm_loadu_pd(z4.as_ptr().add(half)), az);
+                let dot = _mm_add_pd(
+                    _mm_add_pd(_mm_mul_pd(px, dx), _mm_mul_pd(py, dy)),
+                    _mm_mul_pd(pz, dz),
+                );
+                // maxpd/minpd return the second operand on NaN, like the scalar `if`s.
+                let w = _mm_min_pd(_mm_max_pd(_mm_mul_pd(dot, inv), zero), one);
+                let ex = _mm_sub_pd(px, _mm_mul_pd(w, dx));
+                let ey = _mm_sub_pd(py, _mm_mul_pd(w, dy));
+                let ez = _mm_sub_pd(pz, _mm_mul_pd(w, dz));
+                let d2 = _mm_add_pd(
+                    _mm_add_pd(_mm_mul_pd(ex, ex), _mm_mul_pd(ey, ey)),
+                    _mm_mul_pd(ez, ez),
+                );
+                acc = _mm_min_pd(d2, acc);
+            }
+        }
+        let hi = _mm_unpackhi_pd(acc, acc);
+        _mm_cvtsd_f64(_mm_min_sd(acc, hi))
+    }
+}
+
+/// Eq. 11 kernel with AVX: four obstacles per instruction; the same operations in the same
+/// order as the other kernels (no FMA), so the same bits.
+///
+/// # Safety
+/// The CPU must support AVX (checked once in [`Clearance::new`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn min_d2_avx(
+    xs: &[[f64; LANES]],
+    ys: &[[f64; LANES]],
+    zs: &[[f64; LANES]],
+    points: &ArmPoints,
+    scale: f64,
+    stop: f64,
+) -> f64 {
+    use std::arch::x86_64::*;
+    let mut m = f64::INFINITY;
+    let mut used = false;
+    for k in 0..8 {
+        let Some(s) = Seg::pick(points, k, scale, used) else {
+            continue;
+        };
+        used = true;
+        // SAFETY: AVX is enabled on this function; loads read one whole [f64; 4].
+        #[allow(unused_unsafe)]
+        let d2min = unsafe {
+            let (ax, ay, az) = (
+                _mm256_set1_pd(s.a[0]),
+                _mm256_set1_pd(s.a[1]),
+                _mm256_set1_pd(s.a[2]),
+            );
+            let (dx, dy, dz) = (
+                _mm256_set1_pd(s.d[0]),
+                _mm256_set1_pd(s.d[1]),
+                _mm256_set1_pd(s.d[2]),
+            );
+            let inv = _mm256_set1_pd(s.inv_dd);
+            let zero = _mm256_setzero_pd();
+            let one = _mm256_set1_pd(1.0);
+            let mut acc = _mm256_set1_pd(f64::INFINITY);
+            for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
+                let px = _mm256_sub_pd(_mm256_loadu_pd(x4.as_ptr()), ax);
+                let py = _mm256_sub_pd(_mm256_loadu_pd(y4.as_ptr()), ay);
+                let pz = _mm256_sub_pd(_mm256_loadu_pd(z4.as_ptr()), az);
+                let dot = _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(px, dx), _mm256_mul_pd(py, dy)),
+                    _mm256_mul_pd(pz, dz),
+                );
+                let w = _mm256_min_pd(_mm256_max_pd(_mm256_mul_pd(dot, inv), zero), one);
+                let ex = _mm256_sub_pd(px, _mm256_mul_pd(w, dx));
+                let ey = _mm256_sub_pd(py, _mm256_mul_pd(w, dy));
+                let ez = _mm256_sub_pd(pz, _mm256_mul_pd(w, dz));
+                let d2 = _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(ex, ex), _mm256_mul_pd(ey, ey)),
+                    _mm256_mul_pd(ez, ez),
+                );
+                acc = _mm256_min_pd(d2, acc);
+            }
+            let lo = _mm256_castpd256_pd128(acc);
+            let hi = _mm256_extractf128_pd(acc, 1);
+            let two = _mm_min_pd(lo, hi);
+            _mm_cvtsd_f64(_mm_min_sd(two, _mm_unpackhi_pd(two, two)))
+        };
+        if d2min < m {
+            m = d2min;
+            if m <= stop {
+                break;
+            }
+        }
+    }
+    m
+}
+
+/// The links of the capsules model: the polyline's segments, zero-length ones left out (such
+/// a ball lies inside its neighbour's capsule, the polyline being connected) unless all are.
+fn capsule_links(points: &ArmPoints) -> impl Iterator<Item = (&Vector3<f64>, &Vector3<f64>)> {
+    let all_zero = points.windows(2).all(|w| w[0] == w[1]);
+    (0..7)
+        .map(move |k| (&points[k], &points[k + 1]))
+        .filter(move |(a, b)| a != b || (all_zero && std::ptr::eq(*a, &points[0])))
+}
+
+/// Whether the 4-wide AVX kernel can run here.
+fn cpu_has_avx() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 impl Clearance {
     /// Clearance against `obstacles` (cells, cubes of edge `cell_mm` mm on their centres),
     /// with the given model and arm safe distance d_p (cells; used by the centres model).
@@ -218,14 +409,14 @@ impl Clearance {
         arm_safe_distance_cells: f64,
     ) -> Clearance {
         let count = obstacles.len();
-        let padded = count.div_ceil(LANES) * LANES;
-        let mut xs = vec![FAR; padded];
-        let mut ys = vec![FAR; padded];
-        let mut zs = vec![FAR; padded];
+        let chunks = count.div_ceil(LANES);
+        let mut xs = vec![[FAR; LANES]; chunks];
+        let mut ys = vec![[FAR; LANES]; chunks];
+        let mut zs = vec![[FAR; LANES]; chunks];
         for (i, c) in obstacles.iter().enumerate() {
-            xs[i] = c[0] as f64;
-            ys[i] = c[1] as f64;
-            zs[i] = c[2] as f64;
+            xs[i / LANES][i % LANES] = c[0] as f64;
+            ys[i / LANES][i % LANES] = c[1] as f64;
+            zs[i / LANES][i % LANES] = c[2] as f64;
         }
         Clearance {
             xs,
@@ -235,6 +426,7 @@ impl Clearance {
             cell_mm,
             model,
             arm_safe_distance_cells,
+            avx: cpu_has_avx(),
         }
     }
 
@@ -256,7 +448,8 @@ impl Clearance {
 
     /// Obstacle centre `i`, cells.
     fn centre_cells(&self, i: usize) -> Vector3<f64> {
-        Vector3::new(self.xs[i], self.ys[i], self.zs[i])
+        let (j, l) = (i / LANES, i % LANES);
+        Vector3::new(self.xs[j][l], self.ys[j][l], self.zs[j][l])
     }
 
     /// The model in use.
@@ -274,44 +467,42 @@ impl Clearance {
         self.arm_safe_distance_cells
     }
 
-    /// Smallest squared distance (cells²) from any obstacle centre to one segment.
+    /// Smallest squared distance (cells²) from any obstacle centre to any segment of the
+    /// polyline `points` (mm); stops early (with some value `<= stop`) once the minimum so
+    /// far is `<= stop`. Zero-length segments are skipped (see `Seg::pick`).
     #[inline]
-    fn seg_min_d2(&self, s: &Seg) -> f64 {
-        let mut acc = [f64::INFINITY; LANES];
-        let chunks = self
-            .xs
-            .chunks_exact(LANES)
-            .zip(self.ys.chunks_exact(LANES))
-            .zip(self.zs.chunks_exact(LANES));
-        for ((xs, ys), zs) in chunks {
-            for l in 0..LANES {
-                let px = xs[l] - s.a[0];
-                let py = ys[l] - s.a[1];
-                let pz = zs[l] - s.a[2];
-                let w = ((px * s.d[0] + py * s.d[1] + pz * s.d[2]) * s.inv_dd).clamp(0.0, 1.0);
-                let ex = px - w * s.d[0];
-                let ey = py - w * s.d[1];
-                let ez = pz - w * s.d[2];
-                let d2 = ex * ex + ey * ey + ez * ez;
-                acc[l] = if d2 < acc[l] { d2 } else { acc[l] };
+    fn min_d2(&self, points: &ArmPoints, stop: f64) -> f64 {
+        let scale = 1.0 / self.cell_mm;
+        #[cfg(target_arch = "x86_64")]
+        if self.avx {
+            // SAFETY: `avx` is true only when the CPU supports AVX.
+            return unsafe { min_d2_avx(&self.xs, &self.ys, &self.zs, points, scale, stop) };
+        }
+        let mut m = f64::INFINITY;
+        let mut used = false;
+        for k in 0..8 {
+            let Some(s) = Seg::pick(points, k, scale, used) else {
+                continue;
+            };
+            used = true;
+            #[cfg(target_arch = "x86_64")]
+            let d2 = seg_min_d2_sse2(&self.xs, &self.ys, &self.zs, &s);
+            #[cfg(not(target_arch = "x86_64"))]
+            let d2 = seg_min_d2_scalar(&self.xs, &self.ys, &self.zs, &s);
+            if d2 < m {
+                m = d2;
+                if m <= stop {
+                    break;
+                }
             }
         }
-        acc.iter()
-            .fold(f64::INFINITY, |m, &v| if v < m { v } else { m })
+        m
     }
 
     /// Centres model (eq. 11): smallest distance from any obstacle centre to any of the 7
     /// polyline segments, in cells; `INFINITY` without obstacles.
     pub fn centres_clearance_cells(&self, points: &ArmPoints) -> f64 {
-        let scale = 1.0 / self.cell_mm;
-        let mut m = f64::INFINITY;
-        for k in 0..7 {
-            let d2 = self.seg_min_d2(&Seg::new(&points[k], &points[k + 1], scale));
-            if d2 < m {
-                m = d2;
-            }
-        }
-        m.sqrt()
+        self.min_d2(points, -1.0).sqrt()
     }
 
     /// Capsules model: smallest gap between the 7 link capsules and the obstacle cubes, mm
@@ -321,8 +512,7 @@ impl Clearance {
         let half_diag = half * 3f64.sqrt();
         let r = link_radius_mm;
         let mut best = f64::INFINITY;
-        for k in 0..7 {
-            let (a, b) = (&points[k], &points[k + 1]);
+        for (a, b) in capsule_links(points) {
             for i in 0..self.count {
                 let c = self.centre_cells(i) * self.cell_mm;
                 let dc = segment_point_distance(a, b, &c);
@@ -360,10 +550,9 @@ impl Clearance {
     pub fn pose_is_clear(&self, points: &ArmPoints) -> bool {
         match self.model {
             ClearanceModel::Centres => {
-                let scale = 1.0 / self.cell_mm;
                 let t = self.arm_safe_distance_cells;
                 let t2 = t * t;
-                (0..7).all(|k| self.seg_min_d2(&Seg::new(&points[k], &points[k + 1], scale)) > t2)
+                self.min_d2(points, t2) > t2
             }
             ClearanceModel::Capsules {
                 link_radius_mm,
@@ -372,8 +561,7 @@ impl Clearance {
                 let half = 0.5 * self.cell_mm;
                 let half_diag = half * 3f64.sqrt();
                 let r = link_radius_mm;
-                for k in 0..7 {
-                    let (a, b) = (&points[k], &points[k + 1]);
+                for (a, b) in capsule_links(points) {
                     for i in 0..self.count {
                         let c = self.centre_cells(i) * self.cell_mm;
                         let dc = segment_point_distance(a, b, &c);
@@ -423,6 +611,44 @@ impl Clearance {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kinematics::PAPER_BETA0_DEG;
+
+    /// The AVX, SSE2 and portable kernels give the same bits.
+    #[test]
+    fn kernels_agree_bit_for_bit() {
+        let s = Scenario::builtin("paper_simple").unwrap();
+        let arm = s.arm();
+        let with_avx = Clearance::from_scenario(&s);
+        let mut without = with_avx.clone();
+        without.avx = false;
+        let b0 = PAPER_BETA0_DEG.map(f64::to_radians);
+        for k in 0..300 {
+            let mut q = b0;
+            for (i, x) in q.iter_mut().enumerate() {
+                *x += ((k * 7 + i * 5) % 29) as f64 * 0.2 - 2.8;
+            }
+            let p = arm.points_mm(&q);
+            let a = with_avx.clearance_cells(&p);
+            let b = without.clearance_cells(&p);
+            assert_eq!(a.to_bits(), b.to_bits(), "pose {k}");
+            let mut m = f64::INFINITY;
+            for w in p.windows(2) {
+                let seg = Seg::new(&w[0], &w[1], 0.01);
+                m = m.min(seg_min_d2_scalar(
+                    &with_avx.xs,
+                    &with_avx.ys,
+                    &with_avx.zs,
+                    &seg,
+                ));
+            }
+            assert_eq!(m.sqrt().to_bits(), a.to_bits(), "pose {k}");
+            assert_eq!(with_avx.pose_is_clear(&p), without.pose_is_clear(&p));
+        }
+        // A polyline collapsed to one point.
+        let p = [Vector3::new(0.0, 100.0, 200.0); 8];
+        assert!((with_avx.clearance_cells(&p) - 1.0).abs() < 1e-12);
+        assert_eq!(with_avx.clearance_cells(&p), without.clearance_cells(&p));
+    }
 
     #[test]
     fn segment_cube_distance_cases() {

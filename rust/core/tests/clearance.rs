@@ -19,10 +19,10 @@ fn beta0() -> [f64; 6] {
 /// Naive eq. 11 over every segment and obstacle, cells.
 fn naive_centres(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> f64 {
     let mut m = f64::INFINITY;
-    for k in 0..7 {
+    for w in points.windows(2) {
         for c in obstacles {
             let o = v(c[0] as f64, c[1] as f64, c[2] as f64) * cell_mm;
-            m = m.min(segment_point_distance(&points[k], &points[k + 1], &o) / cell_mm);
+            m = m.min(segment_point_distance(&w[0], &w[1], &o) / cell_mm);
         }
     }
     m
@@ -142,9 +142,9 @@ fn interpolate_takes_the_shortest_way_across_the_seam() {
     let mut prev = from;
     for k in 1..=50 {
         let q = interpolate(&from, &to, k as f64 / 50.0);
-        for i in 0..6 {
-            assert!(q[i] > -PI && q[i] <= PI);
-            assert!(wrap_angle(q[i] - prev[i]).abs() <= 0.4f64.to_radians() + 1e-12);
+        for (x, p) in q.iter().zip(&prev) {
+            assert!(*x > -PI && *x <= PI);
+            assert!(wrap_angle(x - p).abs() <= 0.4f64.to_radians() + 1e-12);
         }
         prev = q;
     }
@@ -340,11 +340,10 @@ fn capsules_on_the_paper_scene_agree_with_naive_search_and_bounds() {
         let p = arm.points_mm(&q);
         let gap = c.clearance_cells(&p);
         let mut want = f64::INFINITY;
-        for j in 0..7 {
+        for w in p.windows(2) {
             for o in &s.obstacles {
                 let centre = v(o[0] as f64, o[1] as f64, o[2] as f64) * 100.0;
-                want =
-                    want.min((segment_cube_ternary(&p[j], &p[j + 1], &centre, 50.0) - r).max(0.0));
+                want = want.min((segment_cube_ternary(&w[0], &w[1], &centre, 50.0) - r).max(0.0));
             }
         }
         assert!(
