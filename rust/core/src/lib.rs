@@ -15,10 +15,12 @@
 
 pub mod clearance;
 pub mod error;
+pub mod ik;
 pub mod kinematics;
 pub mod scenario;
 
 pub use clearance::Clearance;
 pub use error::{Error, Result};
+pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use scenario::{Cell, Scenario};
