@@ -9,6 +9,7 @@
 //! - [`scenario`] — the world of one experiment, from JSON.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
 //! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
+//! - [`planner`] — pose planning over a terminal path (Algorithm 1).
 //! - [`error`] — the one error type.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
@@ -17,10 +18,12 @@ pub mod clearance;
 pub mod error;
 pub mod ik;
 pub mod kinematics;
+pub mod planner;
 pub mod scenario;
 
 pub use clearance::Clearance;
 pub use error::{Error, Result};
 pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
+pub use planner::{PosePlan, PosePlanner, PosePoint};
 pub use scenario::{Cell, Scenario};
