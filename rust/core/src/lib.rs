@@ -11,21 +11,43 @@
 //! - [`qlearning`] — tabular Q-learning (eqs. 6-8), learned path, Q-table files.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
 //! - [`ik`] — closed-form inverse kinematics, every solution (up to 8).
+//! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
+//! - [`planner`] — pose planning over a terminal path (Algorithm 1).
+//! - [`replanning`] — the integrated loop with re-planning (Algorithm 2).
+//! - [`generator`] — random cluttered scenarios for benchmarks.
 //! - [`error`] — the one error type; [`io`] — atomic file output.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
+//!
+//! ```
+//! use sixaxis_core::{replanning::{plan, PlanOptions}, Scenario};
+//! let s = Scenario::load("paper_simple").unwrap();
+//! let mut opts = PlanOptions::from_scenario(&s);
+//! opts.train.episodes = 2000;
+//! opts.train.epsilon_decay_episodes = 1980;
+//! let result = plan(&s, &opts, None).unwrap();
+//! assert!(result.success, "{:?}", result.failure);
+//! assert_eq!(result.poses_rad.len(), result.path.len());
+//! ```
 
+pub mod clearance;
 pub mod error;
+pub mod generator;
 pub mod grid;
 pub mod ik;
 pub mod io;
 pub mod kinematics;
+pub mod planner;
 pub mod qlearning;
+pub mod replanning;
 pub mod scenario;
 
+pub use clearance::Clearance;
 pub use error::{Error, Result};
 pub use grid::{Assist, GridWorld, Transition};
 pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
+pub use planner::{PosePlan, PosePlanner, PosePoint};
 pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
+pub use replanning::{plan, PlanOptions, PlanResult};
 pub use scenario::{Cell, Scenario};
