@@ -15,7 +15,7 @@ use crate::Failure;
 /// Learning options shared by `train` and `plan`.
 #[derive(Args, Debug, Clone)]
 pub struct LearnArgs {
-    /// Scenario file or built-in name (paper_simple, paper_complex, replan_shelf).
+    /// Scenario file or built-in name (paper_simple, paper_complex, replan_clutter).
     #[arg(long, value_name = "NAME_OR_FILE", default_value = "paper_simple")]
     pub scenario: String,
     /// Seed of the learner's random generator (default: the scenario's `learning.seed`).

@@ -73,7 +73,7 @@ enum Command {
     ///
     /// Example: sixaxis validate envs/paper_simple.json
     Validate {
-        /// Scenario file or built-in name (paper_simple, paper_complex, replan_shelf).
+        /// Scenario file or built-in name (paper_simple, paper_complex, replan_clutter).
         scenario: String,
         #[command(flatten)]
         out: OutArgs,

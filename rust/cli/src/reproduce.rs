@@ -23,7 +23,7 @@ use crate::Failure;
 #[derive(Args, Debug, Clone)]
 pub struct ReproduceArgs {
     /// Scenarios to run (built-in names or files), comma-separated.
-    #[arg(long, default_value = "paper_simple,paper_complex,replan_shelf")]
+    #[arg(long, default_value = "paper_simple,paper_complex,replan_clutter")]
     pub scenarios: String,
     /// Seeds 0..N per experiment.
     #[arg(long, default_value_t = 10)]

@@ -25,7 +25,7 @@ pub enum Error {
     ScenarioParse(String),
     /// No scenario file and no built-in scenario has that name.
     #[error(
-        "scenario `{name}` not found: not a file, and not one of the built-in scenarios ({known})"
+        "scenario `{name}` not found: not a file, not generated:SEED, and not one of the built-in scenarios ({known})"
     )]
     ScenarioNotFound {
         /// The name or path asked for.

@@ -22,10 +22,7 @@
 //! ```
 //! use sixaxis_core::{replanning::{plan, PlanOptions}, Scenario};
 //! let s = Scenario::load("paper_simple").unwrap();
-//! let mut opts = PlanOptions::from_scenario(&s);
-//! opts.train.episodes = 2000;
-//! opts.train.epsilon_decay_episodes = 1980;
-//! let result = plan(&s, &opts, None).unwrap();
+//! let result = plan(&s, &PlanOptions::from_scenario(&s), None).unwrap();
 //! assert!(result.success, "{:?}", result.failure);
 //! assert_eq!(result.poses_rad.len(), result.path.len());
 //! ```

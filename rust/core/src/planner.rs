@@ -149,6 +149,8 @@ pub struct PosePlanner {
     cell_mm: f64,
     /// Joint limits, radians, `[low, high]` per joint.
     limits_rad: Option<[[f64; 2]; 6]>,
+    /// Motion checks allowed for backtracking after a dead end (0: the paper's greedy pass).
+    backtrack_budget: u32,
 }
 
 impl PosePlanner {
@@ -164,6 +166,7 @@ impl PosePlanner {
             s.cell_mm,
             s.arm.joint_limits_deg,
         )
+        .with_backtrack_budget(s.planning.backtrack_budget)
     }
 
     /// A planner from its parts: arm, clearance, orientation grid divisions n_d (eq. 12),
@@ -184,7 +187,16 @@ impl PosePlanner {
             cell_mm,
             limits_rad: joint_limits_deg
                 .map(|l| l.map(|[lo, hi]| [lo.to_radians(), hi.to_radians()])),
+            backtrack_budget: 0,
         }
+    }
+
+    /// The same planner with a backtracking budget: the number of joint-space motion checks
+    /// [`PosePlanner::plan_poses`] may spend revisiting earlier points' poses after a dead
+    /// end. 0 gives the paper's greedy Algorithm 1.
+    pub fn with_backtrack_budget(mut self, motion_checks: u32) -> PosePlanner {
+        self.backtrack_budget = motion_checks;
+        self
     }
 
     /// The same planner with another clearance (e.g. with obstacles added by a re-plan).
@@ -272,10 +284,18 @@ impl PosePlanner {
         })
     }
 
-    /// One step of Algorithm 1: the first (orientation, solution) that reaches `cell` safely
-    /// from pose `cur` with current grid orientation `cur_orient`.
-    fn step(&self, cur: &Joints, cur_orient: usize, cell: Cell) -> Option<(Joints, usize)> {
+    /// The candidates of Algorithm 1 at `cell` from pose `cur` with grid orientation
+    /// `cur_orient`, in the order they are tried: orientations by growing angle from the
+    /// current one, then IK solutions by joint distance from `cur`. Each is
+    /// `(orientation index, solution index, pose)`.
+    fn candidates(
+        &self,
+        cur: &Joints,
+        cur_orient: usize,
+        cell: Cell,
+    ) -> Vec<(usize, usize, Joints)> {
         let position_mm = self.centre_mm(cell);
+        let mut out = Vec::new();
         for o in self.orientation_order(cur_orient) {
             let sols = self.arm.ik(&TerminalPose {
                 position_mm,
@@ -287,57 +307,101 @@ impl PosePlanner {
                 .map(|(i, q)| (joint_distance(cur, q), i))
                 .collect();
             order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            for (_, i) in order {
-                let q = sols[i];
-                if self.within_limits(&q)
-                    && self.clearance.pose_is_clear(&self.arm.points_mm(&q))
-                    && self.motion_ok(cur, &q)
-                {
-                    return Some((q, o));
+            out.extend(order.into_iter().map(|(_, i)| (o, i, sols[i])));
+        }
+        out
+    }
+
+    /// Depth-first search of Algorithm 1 from path index `i`: the first candidate whose
+    /// motion from `cur` is clear is taken, as in the paper; only when the rest of the path
+    /// then fails are later candidates tried (within the budget). `out` holds the poses so far.
+    fn descend(
+        &self,
+        path: &[Cell],
+        i: usize,
+        cur: &Joints,
+        cur_orient: usize,
+        st: &mut Search,
+        out: &mut Vec<PosePoint>,
+    ) -> bool {
+        let Some(&cell) = path.get(i) else {
+            return true;
+        };
+        if i > st.deepest {
+            st.deepest = i;
+            st.deepest_reached = out.clone();
+        }
+        for (o, k, q) in self.candidates(cur, cur_orient, cell) {
+            if st.dead.contains(&(i, o, k))
+                || !self.within_limits(&q)
+                || !self.clearance.pose_is_clear(&self.arm.points_mm(&q))
+            {
+                continue;
+            }
+            if st.backtracking {
+                if st.checks >= self.backtrack_budget {
+                    return false;
                 }
+                st.checks += 1;
+            }
+            if !self.motion_ok(cur, &q) {
+                continue;
+            }
+            out.push(PosePoint {
+                cell,
+                joints_rad: q,
+                orientation_rpy_deg: self.grid[o].rpy_deg,
+            });
+            if self.descend(path, i + 1, &q, o, st, out) {
+                return true;
+            }
+            out.pop();
+            // Whether the rest of the path can be done from this pose does not depend on
+            // how it was reached: remember the dead end.
+            st.dead.insert((i, o, k));
+            st.backtracking = true;
+            if st.checks >= self.backtrack_budget {
+                return false;
             }
         }
-        None
+        false
     }
 
     /// Algorithm 1 over a terminal path (cells, `path[0]` = start) from pose `beta0`
     /// (radians). The start gets `beta0` and the orientation of `FK(beta0)` as rpy degrees;
     /// `Complete` holds one [`PosePoint`] per path cell, start included. An empty path gives
     /// an empty `Complete`.
+    ///
+    /// At each point the first candidate (orientations by growing angle from the current
+    /// one, IK solutions by joint distance) whose interpolated motion keeps the clearance is
+    /// taken. With a backtracking budget (`planning.backtrack_budget`), a dead end further on
+    /// sends the search back to try the next candidates of earlier points, spending at most
+    /// that many motion checks; with budget 0 this is the paper's greedy pass, and whenever
+    /// the greedy pass succeeds both give the same poses. `Blocked` names the farthest point
+    /// that no explored pose could reach.
     pub fn plan_poses(&self, path: &[Cell], beta0: &Joints) -> PosePlan {
         let Some(&start) = path.first() else {
             return PosePlan::Complete(Vec::new());
         };
         let start_rot = self.arm.fk(beta0).rotation;
-        let mut cur = *beta0;
-        let mut cur_orient = self.nearest_orientation(&start_rot);
         let mut poses = Vec::with_capacity(path.len());
         poses.push(PosePoint {
             cell: start,
-            joints_rad: cur,
+            joints_rad: *beta0,
             orientation_rpy_deg: rpy_deg_from_rotation(&start_rot),
         });
-        for (index, &cell) in path.iter().enumerate().skip(1) {
-            match self.step(&cur, cur_orient, cell) {
-                Some((q, o)) => {
-                    poses.push(PosePoint {
-                        cell,
-                        joints_rad: q,
-                        orientation_rpy_deg: self.grid[o].rpy_deg,
-                    });
-                    cur = q;
-                    cur_orient = o;
-                }
-                None => {
-                    return PosePlan::Blocked {
-                        reached: poses,
-                        index,
-                        cell,
-                    }
-                }
-            }
+        let mut st = Search::default();
+        let orient = self.nearest_orientation(&start_rot);
+        if self.descend(path, 1, beta0, orient, &mut st, &mut poses) {
+            return PosePlan::Complete(poses);
         }
-        PosePlan::Complete(poses)
+        let mut reached = vec![poses[0].clone()];
+        reached.extend(st.deepest_reached.into_iter().skip(1));
+        PosePlan::Blocked {
+            reached,
+            index: st.deepest,
+            cell: path[st.deepest],
+        }
     }
 
     /// Best static clearance (cells) over every IK solution (within joint limits) of every
@@ -447,4 +511,18 @@ mod tests {
         s.arm.joint_limits_deg = None;
         assert!(PosePlanner::from_scenario(&s).within_limits(&[-0.1; 6]));
     }
+}
+
+/// Book-keeping of one [`PosePlanner::plan_poses`] search.
+#[derive(Default)]
+struct Search {
+    /// (path index, orientation index, solution index) from which the rest failed.
+    dead: std::collections::HashSet<(usize, usize, usize)>,
+    /// Set after the first dead end: motion checks count against the budget from then on.
+    backtracking: bool,
+    /// Motion checks spent while backtracking.
+    checks: u32,
+    /// Farthest path index the search tried to reach, and the poses up to it.
+    deepest: usize,
+    deepest_reached: Vec<PosePoint>,
 }

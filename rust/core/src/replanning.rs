@@ -11,6 +11,12 @@
 //! beta_0. A blocked point is added as an obstacle for the terminal only: the arm's
 //! clearance is always measured against the scenario's own obstacles.
 //!
+//! Where the blocked point is the target itself (no clear motion reaches any pose there
+//! from the pose at the point before), the point before is recorded instead, so that the
+//! next path approaches the target another way. The run fails with a reason naming the
+//! recorded points when the re-plan cap is reached, when the added points cut the target
+//! off, or when the learned path does not reach the target.
+//!
 //! ```no_run
 //! use sixaxis_core::{replanning::{plan, PlanOptions}, Scenario};
 //! let s = Scenario::load("paper_simple").unwrap();
@@ -189,15 +195,28 @@ pub fn plan(
             PosePlan::Blocked { index, cell, .. } => {
                 summary.blocked_at = Some((index, cell));
                 result.rounds.push(summary);
-                result.path = path;
-                result.added_obstacles.push(cell);
-                if cell == scenario.target {
+                result.path = path.clone();
+                // The target cannot become an obstacle. When no clear motion reaches it
+                // from the pose at the point before, that point is recorded instead, so the
+                // next path approaches the target another way (our extension; the paper is
+                // silent). Where that point is the start, nothing is left to try.
+                let recorded = if cell == scenario.target {
+                    path[index - 1]
+                } else {
+                    cell
+                };
+                if recorded == scenario.start {
                     let why = format!(
-                        "no arm pose reaches the target ({}, {}, {}) with clearance > {} cells",
-                        cell[0], cell[1], cell[2], scenario.arm_safe_distance
+                        "no clear arm motion reaches the target ({}, {}, {}) from the start pose with clearance > {} cells; points that could not be reached: {}",
+                        cell[0],
+                        cell[1],
+                        cell[2],
+                        scenario.arm_safe_distance,
+                        fmt_cells(&result.added_obstacles)
                     );
                     return Ok(finish(result, Some(why)));
                 }
+                result.added_obstacles.push(recorded);
                 if round >= opts.max_replans {
                     let why = format!(
                         "re-plan cap ({}) reached; points that could not be reached: {}",

@@ -27,13 +27,13 @@ use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
 pub type Cell = [i32; 3];
 
 /// Scenarios shipped in `envs/`, by name.
-pub const BUILTIN_NAMES: &[&str] = &["paper_simple", "paper_complex", "replan_shelf"];
+pub const BUILTIN_NAMES: &[&str] = &["paper_simple", "paper_complex", "replan_clutter"];
 
 fn builtin_text(name: &str) -> Option<&'static str> {
     Some(match name {
         "paper_simple" => include_str!("../../../envs/paper_simple.json"),
         "paper_complex" => include_str!("../../../envs/paper_complex.json"),
-        "replan_shelf" => include_str!("../../../envs/replan_shelf.json"),
+        "replan_clutter" => include_str!("../../../envs/replan_clutter.json"),
         _ => return None,
     })
 }
@@ -204,6 +204,9 @@ pub struct Planning {
     pub max_replans: u32,
     /// Clearance model of the whole-arm check.
     pub clearance_model: ClearanceModel,
+    /// Joint-space motion checks Algorithm 1 may spend backtracking to earlier points'
+    /// other poses after a dead end; 0 gives the paper's greedy pass (our extension).
+    pub backtrack_budget: u32,
 }
 
 impl Default for Planning {
@@ -213,6 +216,7 @@ impl Default for Planning {
             orientation_divisions: 8,
             max_replans: 20,
             clearance_model: ClearanceModel::Centres,
+            backtrack_budget: 20000,
         }
     }
 }
@@ -259,8 +263,10 @@ fn fmt_cell(c: Cell) -> String {
 }
 
 impl Scenario {
-    /// Load a scenario by file path, or by built-in name (`paper_simple`, ...).
-    /// A name ending in `.json` or containing a path separator is always read as a file.
+    /// Load a scenario by file path, by built-in name (`paper_simple`, ...), or as
+    /// `generated:SEED`, member SEED of the generated benchmark set
+    /// ([`crate::generator::benchmark_scenario`]). A name ending in `.json` or containing a
+    /// path separator is always read as a file.
     pub fn load(name_or_path: &str) -> Result<Scenario> {
         let path = Path::new(name_or_path);
         if path.is_file() {
@@ -268,6 +274,16 @@ impl Scenario {
         }
         if let Some(text) = builtin_text(name_or_path) {
             return Scenario::from_json(text);
+        }
+        if let Some(seed) = name_or_path.strip_prefix(crate::generator::GENERATED_PREFIX) {
+            let seed: u64 = seed.parse().map_err(|_| {
+                Error::argument(
+                    "scenario",
+                    name_or_path,
+                    "a generated scenario is named generated:SEED with a whole-number seed",
+                )
+            })?;
+            return crate::generator::benchmark_scenario(seed);
         }
         if name_or_path.ends_with(".json") || name_or_path.contains(std::path::MAIN_SEPARATOR) {
             // Reading it gives the precise I/O error (missing file, permission, ...).

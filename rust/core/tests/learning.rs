@@ -334,7 +334,7 @@ fn learner_matches_plain_reference_bit_for_bit() {
         ("paper_simple", 7, Assist::on(), 600),
         ("paper_simple", 8, Assist::off(), 600),
         ("paper_simple", 9, only_detour(), 300),
-        ("replan_shelf", 10, only_distance(), 300),
+        ("replan_clutter", 10, only_distance(), 300),
     ] {
         let sc = scenario(name);
         let w = GridWorld::new(&sc).unwrap();
@@ -621,10 +621,10 @@ fn bfs_shortest_path_on_paper_simple() {
         p.len() - 1
     );
     assert_eq!(w.shortest_path(), Some(p), "deterministic");
-    let shelf = world("replan_shelf");
+    let shelf = world("replan_clutter");
     let p = shelf.shortest_path().unwrap();
     check_path(&shelf, &p);
-    println!("replan_shelf BFS shortest path: {} steps", p.len() - 1);
+    println!("replan_clutter BFS shortest path: {} steps", p.len() - 1);
 }
 
 #[test]
@@ -698,7 +698,7 @@ fn qtable_load_onto_another_world_is_a_mismatch() {
         Err(Error::QTableMismatch(msg)) => msg,
         other => panic!("expected a mismatch, got {other:?}"),
     };
-    let shelf = GridWorld::new(&scenario("replan_shelf")).unwrap();
+    let shelf = GridWorld::new(&scenario("replan_clutter")).unwrap();
     let msg = mismatch(&shelf);
     assert!(msg.contains("obstacles differ"), "{msg}");
     let extra = GridWorld::with_extra_obstacles(&sc, &[[0, 0, 0]]).unwrap();

@@ -342,7 +342,7 @@ fn free_cells(s: &Scenario) -> Vec<Cell> {
 #[test]
 #[ignore = "report, prints the unreachable cells"]
 fn report_unreachable_cells() {
-    for name in ["paper_simple", "paper_complex", "replan_shelf"] {
+    for name in ["paper_simple", "paper_complex", "replan_clutter"] {
         let s = Scenario::builtin(name).unwrap();
         let planner = PosePlanner::from_scenario(&s);
         let free = free_cells(&s);

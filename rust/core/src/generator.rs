@@ -1,0 +1,206 @@
+//! Random cluttered scenarios for benchmarking learners, deterministic per seed.
+//!
+//! Entry points:
+//! - [`generate`] — one scenario from [`GeneratorOptions`] and a seed: unit-cube clutter at a
+//!   given density inside given bounds, start and target connected (breadth-first search)
+//!   and, by default, both reachable by a clear arm pose; beta_0 is the clearest pose at the
+//!   start.
+//! - [`benchmark_scenario`] — member `i` of the fixed benchmark set, also reachable as the
+//!   scenario name `generated:i` ([`crate::scenario::Scenario::load`]).
+//! - [`expand_names`] — `generated:0..9` and comma lists to scenario names.
+//!
+//! ```
+//! use sixaxis_core::generator::{generate, GeneratorOptions};
+//! let s = generate(&GeneratorOptions::default(), 7).unwrap();
+//! assert_eq!(s, generate(&GeneratorOptions::default(), 7).unwrap());
+//! ```
+
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::grid::GridWorld;
+use crate::planner::PosePlanner;
+use crate::scenario::{Bounds, Cell, Scenario};
+
+/// Prefix of generated scenario names: `generated:SEED`.
+pub const GENERATED_PREFIX: &str = "generated:";
+
+/// How random scenarios are made.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GeneratorOptions {
+    /// The grid, cells (inclusive box).
+    pub bounds: Bounds,
+    /// Fraction of the cells in bounds that become obstacles, in [0, 0.6].
+    pub density: f64,
+    /// Smallest straight-line distance between start and target, cells.
+    pub min_start_target_distance: f64,
+    /// Require a clear arm pose at the start and at the target.
+    pub require_arm_reachable: bool,
+    /// Attempts before giving up.
+    pub max_attempts: u32,
+    /// Every other field (rewards, learning, arm, safe distances, planning) comes from here.
+    pub template: String,
+}
+
+impl Default for GeneratorOptions {
+    fn default() -> Self {
+        GeneratorOptions {
+            bounds: Bounds {
+                min: [-3, -3, -2],
+                max: [3, 5, 5],
+            },
+            density: 0.08,
+            min_start_target_distance: 4.0,
+            require_arm_reachable: true,
+            max_attempts: 200,
+            template: "paper_simple".into(),
+        }
+    }
+}
+
+/// Member `seed` of the fixed benchmark set (default options), named `generated:SEED`.
+pub fn benchmark_scenario(seed: u64) -> Result<Scenario> {
+    generate(&GeneratorOptions::default(), seed)
+}
+
+/// Expand a comma-separated list of names where `generated:A..B` stands for
+/// `generated:A`, …, `generated:B` (inclusive).
+pub fn expand_names(list: &str) -> Result<Vec<String>> {
+    let mut out = Vec::new();
+    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        match item
+            .strip_prefix(GENERATED_PREFIX)
+            .and_then(|r| r.split_once(".."))
+        {
+            Some((a, b)) => {
+                let bad = || {
+                    Error::argument(
+                        "scenarios",
+                        item,
+                        "expected generated:A..B with whole numbers A <= B",
+                    )
+                };
+                let a: u64 = a.parse().map_err(|_| bad())?;
+                let b: u64 = b.parse().map_err(|_| bad())?;
+                if a > b || b - a > 10_000 {
+                    return Err(bad());
+                }
+                out.extend((a..=b).map(|i| format!("{GENERATED_PREFIX}{i}")));
+            }
+            None => out.push(item.to_string()),
+        }
+    }
+    Ok(out)
+}
+
+fn dist(a: Cell, b: Cell) -> f64 {
+    let d: [f64; 3] = [0, 1, 2].map(|i| (a[i] - b[i]) as f64);
+    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+}
+
+/// Generate one scenario. Deterministic: the same options and seed give the same scenario.
+pub fn generate(opts: &GeneratorOptions, seed: u64) -> Result<Scenario> {
+    if !(0.0..=0.6).contains(&opts.density) {
+        return Err(Error::argument(
+            "density",
+            opts.density,
+            "must be in [0, 0.6]",
+        ));
+    }
+    if !opts.min_start_target_distance.is_finite() || opts.min_start_target_distance < 1.0 {
+        return Err(Error::argument(
+            "min_start_target_distance",
+            opts.min_start_target_distance,
+            "must be a finite number >= 1 cell",
+        ));
+    }
+    let template = Scenario::load(&opts.template)?;
+    let b = opts.bounds;
+    if (0..3).any(|i| b.min[i] > b.max[i]) {
+        return Err(Error::argument(
+            "bounds",
+            format!("{:?}..{:?}", b.min, b.max),
+            "empty box",
+        ));
+    }
+    let mut cells: Vec<Cell> = Vec::with_capacity(b.volume());
+    for x in b.min[0]..=b.max[0] {
+        for y in b.min[1]..=b.max[1] {
+            for z in b.min[2]..=b.max[2] {
+                cells.push([x, y, z]);
+            }
+        }
+    }
+    if cells.len() < 2 {
+        return Err(Error::argument(
+            "bounds",
+            cells.len(),
+            "needs at least 2 cells",
+        ));
+    }
+    let base: Cell = [0, 0, 0];
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // One planner on the empty template world: reachability of a cell depends on obstacles,
+    // so it is re-checked below on the generated world.
+    for attempt in 0..opts.max_attempts {
+        let n_obstacles = (opts.density * cells.len() as f64).round() as usize;
+        let start = cells[rng.random_range(0..cells.len())];
+        let target = cells[rng.random_range(0..cells.len())];
+        if dist(start, target) < opts.min_start_target_distance || start == base || target == base {
+            continue;
+        }
+        let mut pool: Vec<Cell> = cells
+            .iter()
+            .copied()
+            .filter(|&c| c != start && c != target && c != base)
+            .collect();
+        pool.shuffle(&mut rng);
+        pool.truncate(n_obstacles);
+        pool.sort();
+        let mut s = template.clone();
+        s.name = format!("{GENERATED_PREFIX}{seed}");
+        s.notes = format!(
+            "Generated (seed {seed}, attempt {attempt}): density {}, bounds {:?}..{:?}, template {}; start and target connected (BFS){}; beta_0 is the clearest arm pose at the start.",
+            opts.density,
+            b.min,
+            b.max,
+            opts.template,
+            if opts.require_arm_reachable { " and reachable by a clear arm pose" } else { "" }
+        );
+        s.bounds = b;
+        s.start = start;
+        s.target = target;
+        s.obstacles = pool;
+        // beta_0: the clearest pose at the start (also decides arm reachability of the start).
+        let planner = PosePlanner::from_scenario(&s);
+        let Some((clearance, pose, _rpy)) = planner.best_clearance_at(start) else {
+            continue;
+        };
+        if opts.require_arm_reachable
+            && !(clearance > s.arm_safe_distance && planner.cell_reachable(target))
+        {
+            continue;
+        }
+        s.arm.beta0_deg = pose.map(f64::to_degrees);
+        if s.validate().is_err() {
+            continue;
+        }
+        let world = GridWorld::new(&s)?;
+        if world.shortest_path().is_none() {
+            continue;
+        }
+        return Ok(s);
+    }
+    Err(Error::argument(
+        "seed",
+        seed,
+        format!(
+            "no scenario meeting the guarantees found in {} attempts (density {})",
+            opts.max_attempts, opts.density
+        ),
+    ))
+}
