@@ -7,15 +7,21 @@
 //!
 //! Modules, in the order the method uses them:
 //! - [`scenario`] — the world of one experiment, from JSON.
+//! - [`grid`] — the terminal's grid world: actions, collisions, rewards (eqs. 5, 9, 10), BFS.
+//! - [`qlearning`] — tabular Q-learning (eqs. 6-8), learned path, Q-table files.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
 //! - [`error`] — the one error type.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 
 pub mod error;
+pub mod grid;
 pub mod kinematics;
+pub mod qlearning;
 pub mod scenario;
 
 pub use error::{Error, Result};
+pub use grid::{Assist, GridWorld, Transition};
 pub use kinematics::{Arm, Joints, TerminalPose};
+pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
 pub use scenario::{Cell, Scenario};

@@ -1,0 +1,746 @@
+//! Tabular Q-learning of the terminal's path (eqs. 6-8), and Q-table files.
+//!
+//! Entry points:
+//! - [`train`] — learn a [`QTable`] on a [`GridWorld`] with [`TrainOptions`]; returns the
+//!   learned path, per-episode statistics and the converged episode ([`TrainResult`]).
+//! - [`greedy_path`] — the learned path (`place`, eq. 8) of a Q-table.
+//! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
+//! - [`QTable::save`] / [`QTable::load`] — atomic Q-table files, checked against the world.
+//!
+//! # Choices where the SPEC is silent
+//!
+//! - **Episodes are counted from 0**: episode `eta` in `0..episodes` explores with
+//!   `epsilon = epsilon_start * (1 - eta / M)` for `eta <= M`, else 0
+//!   (`M = epsilon_decay_episodes`; `M = 0` means no exploration at all). With the paper's
+//!   M = 9900 and 10,000 episodes, episodes 9900..=9999 are purely greedy.
+//! - **Action selection** per step: if `epsilon > 0`, draw `u` uniform in [0, 1); if
+//!   `u < epsilon` take an action uniformly from all six. Otherwise take the greedy action;
+//!   when several actions share the maximal Q-value, one of them is drawn uniformly (a draw
+//!   is made only when there is a tie). All draws come from one
+//!   `ChaCha8Rng::seed_from_u64(seed)` per call of [`train`], in this order, so a run is
+//!   fully determined by (world, options, initial Q-table).
+//! - **Episode end**: on reaching the target (terminal state: the update does not
+//!   bootstrap, `Q += alpha (R - Q)`), or after `max_steps_per_episode` steps (truncation:
+//!   the last update bootstraps as usual).
+//! - **Detour memory** (eq. 9) is reset at the start of every episode.
+//! - **Greedy rollout** ([`greedy_path`], eq. 8): from the start, always the action of
+//!   highest Q, ties broken by the *lowest action index* (deterministic); cells
+//!   start..=target. It fails (`None`) if it does not reach the target within
+//!   `max_steps_per_episode` steps or if it revisits a cell (a colliding greedy move
+//!   revisits the cell it stays on).
+//! - **Converged episode**: the index (from 0, of this call of [`train`]) of the first
+//!   episode after whose updates the greedy path equals the greedy path after every later
+//!   episode; `None` if the final greedy path fails. The path after the last episode is
+//!   compared with the path after the one before, ..., and with the path of the initial
+//!   Q-table for episode 0; if it never changed, the answer is 0. The learner recomputes
+//!   the greedy path only after an episode whose updates changed the greedy action of a
+//!   state the current rollout consults, which is exact and cheap.
+//! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
+//!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
+//!   epsilon schedule) count from 0 again, and the converged episode is an index of this
+//!   run. Pass a seed different from the first run's to avoid replaying its random stream,
+//!   and e.g. `epsilon_start = 0` to continue purely greedily.
+//!
+//! # Q-table file format (version 1)
+//!
+//! ```text
+//! SIXAXIS-QTABLE 1\n
+//! {JSON header}\n
+//! num_states * 6 f64 values, little-endian, row-major (state, action)
+//! ```
+//! The header records `num_states`, `actions` (6), `bounds`, `start`, `target`,
+//! `blocked_cells` (count), `fingerprint` (FNV-1a 64 of bounds, blocked cells and target,
+//! hex) and `values_checksum` (FNV-1a 64 of the value bytes, hex). Values are stored as raw
+//! bits, so a round trip is exact. [`QTable::load`] answers [`Error::QTableMismatch`] when
+//! bounds, target or blocked cells differ from the world's; a file that is not a Q-table,
+//! is truncated or fails its checksum gives an [`Error::Io`] of kind `InvalidData`.
+//! Saving writes a temporary file in the same directory and renames it over the target;
+//! on any error the temporary file is removed.
+
+use std::io::Write;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::grid::{Assist, Fnv, GridWorld, Transition, NUM_ACTIONS};
+use crate::scenario::{Bounds, Cell, Scenario};
+
+/// Everything [`train`] needs besides the world.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainOptions {
+    /// Number of episodes (eta_set).
+    pub episodes: u32,
+    /// Seed of the run's `ChaCha8Rng`.
+    pub seed: u64,
+    /// Reward shaping: eq. 9 and/or eq. 10.
+    pub assist: Assist,
+    /// Learning rate alpha, (0, 1].
+    pub alpha: f64,
+    /// Discount factor gamma, [0, 1].
+    pub gamma: f64,
+    /// epsilon at episode 0, [0, 1].
+    pub epsilon_start: f64,
+    /// M: epsilon falls linearly to 0 at episode M (counted from 0).
+    pub epsilon_decay_episodes: u32,
+    /// Step cap of an episode, and of the greedy rollout.
+    pub max_steps_per_episode: u32,
+}
+
+impl TrainOptions {
+    /// The scenario's `learning` section.
+    pub fn from_scenario(s: &Scenario) -> Self {
+        let l = &s.learning;
+        TrainOptions {
+            episodes: l.episodes,
+            seed: l.seed,
+            assist: Assist::from_scenario(s),
+            alpha: l.alpha,
+            gamma: l.gamma,
+            epsilon_start: l.epsilon_start,
+            epsilon_decay_episodes: l.epsilon_decay_episodes,
+            max_steps_per_episode: l.max_steps_per_episode,
+        }
+    }
+
+    /// Check the ranges; the error names the field.
+    pub fn validate(&self) -> Result<()> {
+        if self.episodes == 0 {
+            return Err(Error::argument("episodes", 0, "must be > 0"));
+        }
+        if self.max_steps_per_episode == 0 {
+            return Err(Error::argument("max_steps_per_episode", 0, "must be > 0"));
+        }
+        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
+            return Err(Error::argument("alpha", self.alpha, "must be in (0, 1]"));
+        }
+        if !(0.0..=1.0).contains(&self.gamma) {
+            return Err(Error::argument("gamma", self.gamma, "must be in [0, 1]"));
+        }
+        if !(0.0..=1.0).contains(&self.epsilon_start) {
+            return Err(Error::argument(
+                "epsilon_start",
+                self.epsilon_start,
+                "must be in [0, 1]",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Exploration rate of episode `episode` (counted from 0), eq. 7.
+    pub fn epsilon(&self, episode: u32) -> f64 {
+        let m = self.epsilon_decay_episodes;
+        if m == 0 || episode > m {
+            0.0
+        } else {
+            self.epsilon_start * (1.0 - episode as f64 / m as f64)
+        }
+    }
+}
+
+/// Q-values: `num_states` rows of six actions, starting at 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QTable {
+    rows: Vec<[f64; NUM_ACTIONS]>,
+}
+
+/// Index of the largest value, lowest index on ties.
+#[inline]
+fn argmax_lowest(row: &[f64; NUM_ACTIONS]) -> usize {
+    let mut best = 0;
+    for a in 1..NUM_ACTIONS {
+        if row[a] > row[best] {
+            best = a;
+        }
+    }
+    best
+}
+
+#[inline]
+fn row_max(row: &[f64; NUM_ACTIONS]) -> f64 {
+    let mut m = row[0];
+    for &v in &row[1..] {
+        if v > m {
+            m = v;
+        }
+    }
+    m
+}
+
+/// Eq. 6: `old + alpha * (reward + gamma * bootstrap - old)`.
+#[inline(always)]
+fn updated(old: f64, reward: f64, bootstrap: f64, alpha: f64, gamma: f64) -> f64 {
+    old + alpha * (reward + gamma * bootstrap - old)
+}
+
+impl QTable {
+    /// All zeros.
+    pub fn zeros(num_states: usize) -> Self {
+        QTable {
+            rows: vec![[0.0; NUM_ACTIONS]; num_states],
+        }
+    }
+
+    /// From flat row-major values (`num_states * 6` of them).
+    pub fn from_values(num_states: usize, values: Vec<f64>) -> Result<Self> {
+        if values.len() != num_states * NUM_ACTIONS {
+            return Err(Error::argument(
+                "values",
+                format!("{} values", values.len()),
+                format!("expected num_states * 6 = {}", num_states * NUM_ACTIONS),
+            ));
+        }
+        let rows = values
+            .chunks_exact(NUM_ACTIONS)
+            .map(|c| c.try_into().expect("chunks of six"))
+            .collect();
+        Ok(QTable { rows })
+    }
+
+    /// Number of states.
+    pub fn num_states(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// All values, row-major (state, action).
+    pub fn values(&self) -> &[f64] {
+        self.rows.as_flattened()
+    }
+
+    /// Q(s, a).
+    #[inline]
+    pub fn get(&self, s: usize, a: usize) -> f64 {
+        self.rows[s][a]
+    }
+
+    /// Set Q(s, a).
+    #[inline]
+    pub fn set(&mut self, s: usize, a: usize, value: f64) {
+        self.rows[s][a] = value;
+    }
+
+    /// The six values of a state.
+    #[inline]
+    pub fn row(&self, s: usize) -> &[f64; NUM_ACTIONS] {
+        &self.rows[s]
+    }
+
+    /// `max_a Q(s, a)`.
+    #[inline]
+    pub fn max_value(&self, s: usize) -> f64 {
+        row_max(&self.rows[s])
+    }
+
+    /// The greedy action of a state, ties broken by the lowest action index.
+    #[inline]
+    pub fn greedy_action(&self, s: usize) -> usize {
+        argmax_lowest(&self.rows[s])
+    }
+
+    /// Write the table to `path` atomically (temporary file in the same directory, then
+    /// rename), with a header that ties it to `world` (see the module docs for the format).
+    pub fn save(&self, path: &Path, world: &GridWorld) -> Result<()> {
+        if self.num_states() != world.num_states() {
+            return Err(Error::QTableMismatch(format!(
+                "table has {} states, world has {}",
+                self.num_states(),
+                world.num_states()
+            )));
+        }
+        let values = self.values();
+        let mut body = Vec::with_capacity(values.len() * 8);
+        for v in values {
+            body.extend_from_slice(&v.to_le_bytes());
+        }
+        let mut ck = Fnv::new();
+        ck.write(&body);
+        let header = FileHeader {
+            format: FORMAT_NAME.to_string(),
+            version: FORMAT_VERSION,
+            num_states: self.num_states(),
+            actions: NUM_ACTIONS,
+            bounds: world.bounds(),
+            start: world.cell_of(world.start()),
+            target: world.cell_of(world.target()),
+            blocked_cells: world.num_blocked(),
+            fingerprint: format!("{:016x}", world.fingerprint()),
+            values_checksum: format!("{:016x}", ck.finish()),
+            layout: "f64 little-endian, row-major (state, action); actions +x -x +y -y +z -z"
+                .to_string(),
+        };
+        let mut bytes = format!("{MAGIC}\n").into_bytes();
+        bytes.extend_from_slice(
+            serde_json::to_string(&header)
+                .expect("a header always serialises")
+                .as_bytes(),
+        );
+        bytes.push(b'\n');
+        bytes.extend_from_slice(&body);
+        write_atomic(path, &bytes)
+    }
+
+    /// Read a table written by [`QTable::save`] and check it fits `world`
+    /// ([`Error::QTableMismatch`] if bounds, target or blocked cells differ).
+    pub fn load(path: &Path, world: &GridWorld) -> Result<QTable> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bad = |why: String| {
+            Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::InvalidData, why),
+            )
+        };
+        let magic = format!("{MAGIC}\n");
+        if !bytes.starts_with(magic.as_bytes()) {
+            return Err(bad(format!(
+                "not a SixAxisAvoid Q-table file (expected first line `{MAGIC}`)"
+            )));
+        }
+        let rest = &bytes[magic.len()..];
+        let nl = rest
+            .iter()
+            .position(|&b| b == b'\n')
+            .ok_or_else(|| bad("Q-table header is not terminated".to_string()))?;
+        let header: FileHeader = serde_json::from_slice(&rest[..nl])
+            .map_err(|e| bad(format!("Q-table header is invalid: {e}")))?;
+        if header.format != FORMAT_NAME || header.version != FORMAT_VERSION {
+            return Err(bad(format!(
+                "unsupported Q-table format {} version {}",
+                header.format, header.version
+            )));
+        }
+        if header.actions != NUM_ACTIONS {
+            return Err(Error::QTableMismatch(format!(
+                "file has {} actions per state, expected {NUM_ACTIONS}",
+                header.actions
+            )));
+        }
+        let wb = world.bounds();
+        if header.bounds != wb || header.num_states != world.num_states() {
+            return Err(Error::QTableMismatch(format!(
+                "bounds differ: file min {:?} max {:?} ({} states), world min {:?} max {:?} ({} states)",
+                header.bounds.min,
+                header.bounds.max,
+                header.num_states,
+                wb.min,
+                wb.max,
+                world.num_states()
+            )));
+        }
+        let wt = world.cell_of(world.target());
+        if header.target != wt {
+            return Err(Error::QTableMismatch(format!(
+                "target differs: file {:?}, world {:?}",
+                header.target, wt
+            )));
+        }
+        let wf = format!("{:016x}", world.fingerprint());
+        if header.fingerprint != wf {
+            return Err(Error::QTableMismatch(format!(
+                "obstacles differ: file has {} blocked cells (fingerprint {}), world has {} (fingerprint {wf})",
+                header.blocked_cells,
+                header.fingerprint,
+                world.num_blocked()
+            )));
+        }
+        let body = &rest[nl + 1..];
+        let expected = header.num_states * NUM_ACTIONS * 8;
+        if body.len() != expected {
+            return Err(bad(format!(
+                "Q-table values have {} bytes, expected {expected}",
+                body.len()
+            )));
+        }
+        let mut ck = Fnv::new();
+        ck.write(body);
+        if format!("{:016x}", ck.finish()) != header.values_checksum {
+            return Err(bad("Q-table values fail their checksum".to_string()));
+        }
+        let values = body
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().expect("chunks of eight")))
+            .collect();
+        QTable::from_values(header.num_states, values)
+    }
+}
+
+const MAGIC: &str = "SIXAXIS-QTABLE 1";
+const FORMAT_NAME: &str = "sixaxis-qtable";
+const FORMAT_VERSION: u32 = 1;
+
+#[derive(Debug, Serialize, Deserialize)]
+struct FileHeader {
+    format: String,
+    version: u32,
+    num_states: usize,
+    actions: usize,
+    bounds: Bounds,
+    start: Cell,
+    target: Cell,
+    blocked_cells: usize,
+    fingerprint: String,
+    values_checksum: String,
+    layout: String,
+}
+
+/// Write `bytes` to a temporary file beside `path`, sync it, rename it over `path`;
+/// remove the temporary file on any error.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .ok_or_else(|| Error::argument("path", path.display(), "has no file name"))?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}-{}",
+        name.to_string_lossy(),
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create_new(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(Error::io(path, e));
+    }
+    Ok(())
+}
+
+/// One update of eq. 6 for the step `state --action--> t`: bootstraps from
+/// `max_a' Q(t.next, a')` unless `t.reached` (the target is terminal). Returns the new
+/// Q(state, action). The learner uses exactly this arithmetic.
+pub fn q_update(
+    q: &mut QTable,
+    state: usize,
+    action: usize,
+    t: &Transition,
+    alpha: f64,
+    gamma: f64,
+) -> f64 {
+    let bootstrap = if t.reached { 0.0 } else { q.max_value(t.next) };
+    let v = updated(q.rows[state][action], t.reward, bootstrap, alpha, gamma);
+    q.rows[state][action] = v;
+    v
+}
+
+/// What [`train`] returns.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrainResult {
+    /// The learned path (greedy rollout, eq. 8), start..=target; `None` if it fails.
+    pub path: Option<Vec<Cell>>,
+    /// Steps of each episode.
+    pub steps_per_episode: Vec<u32>,
+    /// Whether each episode reached the target.
+    pub reached_per_episode: Vec<bool>,
+    /// First episode (from 0) from which the greedy path no longer changed; `None` if the
+    /// final path fails.
+    pub converged_episode: Option<u32>,
+    /// Environment steps over all episodes.
+    pub total_steps: u64,
+    /// Wall time of the call, seconds.
+    pub wall_time_s: f64,
+    /// The learned Q-table.
+    #[serde(skip)]
+    pub q: QTable,
+}
+
+/// Greedy rollout from the start (ties: lowest action index), writing the visited states
+/// into `out` and stamping each with `gen` in `stamp` (the visited set) and its greedy
+/// action in `act`. Returns whether it reached the target.
+fn rollout(
+    world: &GridWorld,
+    q: &[[f64; NUM_ACTIONS]],
+    max_steps: u32,
+    stamp: &mut [u32],
+    act: &mut [u8],
+    gen: u32,
+    out: &mut Vec<u32>,
+) -> bool {
+    let next = world.transitions();
+    let target = world.target();
+    out.clear();
+    let mut cur = world.start();
+    out.push(cur as u32);
+    stamp[cur] = gen;
+    for _ in 0..max_steps {
+        if cur == target {
+            return true;
+        }
+        let a = argmax_lowest(&q[cur]);
+        act[cur] = a as u8;
+        let n = next[cur][a] as usize;
+        if stamp[n] == gen {
+            return false;
+        }
+        stamp[n] = gen;
+        act[n] = argmax_lowest(&q[n]) as u8;
+        out.push(n as u32);
+        cur = n;
+    }
+    cur == target
+}
+
+/// The learned path (eq. 8) of a Q-table: greedy rollout from the world's start, ties
+/// broken by the lowest action index, cells start..=target; `None` if the target is not
+/// reached within `max_steps` steps or a cell is revisited.
+pub fn greedy_path(world: &GridWorld, q: &QTable, max_steps: u32) -> Option<Vec<Cell>> {
+    if q.num_states() != world.num_states() {
+        return None;
+    }
+    let n = world.num_states();
+    let mut stamp = vec![0u32; n];
+    let mut act = vec![0u8; n];
+    let mut out = Vec::new();
+    if rollout(world, &q.rows, max_steps, &mut stamp, &mut act, 1, &mut out) {
+        Some(out.iter().map(|&s| world.cell_of(s as usize)).collect())
+    } else {
+        None
+    }
+}
+
+/// Learn a Q-table on `world` (eqs. 6-7), starting from `initial_q` or zeros. `progress`
+/// is called with the number of episodes done, at most about 100 times. See the module
+/// docs for the exact semantics; the result is a pure function of the arguments (but
+/// `wall_time_s`).
+pub fn train(
+    world: &GridWorld,
+    opts: &TrainOptions,
+    initial_q: Option<QTable>,
+    progress: Option<&dyn Fn(u32)>,
+) -> Result<TrainResult> {
+    train_impl(world, opts, initial_q, progress, false)
+}
+
+/// [`train`]; with `rollout_every_episode` the greedy path is recomputed after every
+/// episode (the reference for the incremental bookkeeping, for tests).
+fn train_impl(
+    world: &GridWorld,
+    opts: &TrainOptions,
+    initial_q: Option<QTable>,
+    progress: Option<&dyn Fn(u32)>,
+    rollout_every_episode: bool,
+) -> Result<TrainResult> {
+    let started = Instant::now();
+    opts.validate()?;
+    let n = world.num_states();
+    let mut q = match initial_q {
+        Some(q) if q.num_states() != n => {
+            return Err(Error::QTableMismatch(format!(
+                "initial Q-table has {} states, world has {n}",
+                q.num_states()
+            )))
+        }
+        Some(q) => q,
+        None => QTable::zeros(n),
+    };
+
+    // Reward of (s, a) without eq. 9, and eq. 9's two penalties.
+    let assist = opts.assist;
+    let reward_table: Vec<[f64; NUM_ACTIONS]> = (0..n)
+        .map(|s| std::array::from_fn(|a| world.base_reward(s, a, assist)))
+        .collect();
+    let detour = assist.detour;
+    let repeat_pen = -world.rewards().repeat_collision_penalty;
+    let reverse_pen = -world.rewards().reverse_after_collision_penalty;
+
+    let next = world.transitions();
+    let start = world.start();
+    let target = world.target();
+    let (alpha, gamma) = (opts.alpha, opts.gamma);
+    let max_steps = opts.max_steps_per_episode;
+    let episodes = opts.episodes;
+    let chunk = episodes.div_ceil(100).max(1);
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+
+    let mut steps_per_episode = Vec::with_capacity(episodes as usize);
+    let mut reached_per_episode = Vec::with_capacity(episodes as usize);
+    let mut total_steps = 0u64;
+
+    // Greedy-path tracking for the converged episode.
+    let mut stamp = vec![0u32; n];
+    let mut act = vec![0u8; n];
+    let mut gen = 1u32;
+    let mut path = Vec::new();
+    let mut path_ok = rollout(
+        world, &q.rows, max_steps, &mut stamp, &mut act, gen, &mut path,
+    );
+    let mut new_path = Vec::new();
+    let mut last_change = 0u32;
+
+    const NO_ACTION: usize = usize::MAX;
+    let qr = &mut q.rows;
+    for ep in 0..episodes {
+        let eps = opts.epsilon(ep);
+        let mut s = start;
+        let mut last_collided = NO_ACTION;
+        let mut steps = 0u32;
+        let mut reached = false;
+        let mut dirty = rollout_every_episode;
+        while steps < max_steps {
+            // Action selection (eq. 7).
+            let a = if eps > 0.0 && rng.random::<f64>() < eps {
+                rng.random_range(0..NUM_ACTIONS as u32) as usize
+            } else {
+                let row = &qr[s];
+                let mut best = row[0];
+                let mut ties = [0u8; NUM_ACTIONS];
+                let mut k = 1usize;
+                for (i, &v) in row.iter().enumerate().skip(1) {
+                    if v > best {
+                        best = v;
+                        ties[0] = i as u8;
+                        k = 1;
+                    } else if v == best {
+                        ties[k] = i as u8;
+                        k += 1;
+                    }
+                }
+                if k == 1 {
+                    ties[0] as usize
+                } else {
+                    ties[rng.random_range(0..k as u32) as usize] as usize
+                }
+            };
+            // Environment step (eqs. 5, 9, 10).
+            let ns = next[s][a] as usize;
+            let collided = ns == s;
+            let mut reward = reward_table[s][a];
+            if detour && last_collided != NO_ACTION {
+                if collided {
+                    reward += repeat_pen;
+                } else if a ^ 1 == last_collided {
+                    reward += reverse_pen;
+                }
+            }
+            reached = ns == target && !collided;
+            // Q-update (eq. 6).
+            let bootstrap = if reached { 0.0 } else { row_max(&qr[ns]) };
+            let old = qr[s][a];
+            qr[s][a] = updated(old, reward, bootstrap, alpha, gamma);
+            if !dirty && stamp[s] == gen && argmax_lowest(&qr[s]) != act[s] as usize {
+                dirty = true;
+            }
+            last_collided = if collided { a } else { NO_ACTION };
+            steps += 1;
+            s = ns;
+            if reached {
+                break;
+            }
+        }
+        total_steps += steps as u64;
+        steps_per_episode.push(steps);
+        reached_per_episode.push(reached);
+        if dirty {
+            gen += 1;
+            let ok = rollout(
+                world,
+                qr,
+                max_steps,
+                &mut stamp,
+                &mut act,
+                gen,
+                &mut new_path,
+            );
+            let same = ok == path_ok && (!ok || new_path == path);
+            if !same {
+                last_change = ep;
+            }
+            std::mem::swap(&mut path, &mut new_path);
+            path_ok = ok;
+        }
+        if let Some(p) = progress {
+            if (ep + 1) % chunk == 0 || ep + 1 == episodes {
+                p(ep + 1);
+            }
+        }
+    }
+
+    let final_path = if path_ok {
+        Some(path.iter().map(|&s| world.cell_of(s as usize)).collect())
+    } else {
+        None
+    };
+    let converged_episode = path_ok.then_some(last_change);
+    Ok(TrainResult {
+        path: final_path,
+        steps_per_episode,
+        reached_per_episode,
+        converged_episode,
+        total_steps,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        q,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn epsilon_schedule() {
+        let s = Scenario::builtin("paper_simple").unwrap();
+        let o = TrainOptions::from_scenario(&s);
+        assert_eq!(o.epsilon(0), 0.1);
+        assert!((o.epsilon(4950) - 0.05).abs() < 1e-15);
+        assert_eq!(o.epsilon(9900), 0.0);
+        assert_eq!(o.epsilon(9901), 0.0);
+        let o0 = TrainOptions {
+            epsilon_decay_episodes: 0,
+            ..o
+        };
+        assert_eq!(o0.epsilon(0), 0.0);
+    }
+
+    #[test]
+    fn argmax_ties_lowest() {
+        assert_eq!(argmax_lowest(&[0.0; 6]), 0);
+        assert_eq!(argmax_lowest(&[0.0, 1.0, 1.0, 0.0, 0.0, 0.0]), 1);
+        assert_eq!(argmax_lowest(&[-1.0, -1.0, -1.0, -1.0, -1.0, -0.5]), 5);
+        assert_eq!(row_max(&[-3.0, -2.0, -1.0, -4.0, -5.0, -6.0]), -1.0);
+    }
+
+    #[test]
+    fn tracked_path_equals_fresh_rollout() {
+        // The incremental converged-episode bookkeeping must agree with a fresh rollout.
+        let s = Scenario::builtin("paper_simple").unwrap();
+        let w = GridWorld::new(&s).unwrap();
+        let mut o = TrainOptions::from_scenario(&s);
+        o.episodes = 300;
+        o.epsilon_decay_episodes = 297;
+        let r = train(&w, &o, None, None).unwrap();
+        assert_eq!(r.path, greedy_path(&w, &r.q, o.max_steps_per_episode));
+        for (name, seed, assist) in [
+            ("paper_simple", 0, Assist::on()),
+            ("paper_simple", 1, Assist::on()),
+            ("paper_simple", 2, Assist::off()),
+            ("paper_complex", 3, Assist::on()),
+        ] {
+            let s = Scenario::builtin(name).unwrap();
+            let w = GridWorld::new(&s).unwrap();
+            let mut o = TrainOptions::from_scenario(&s);
+            o.episodes = 2000;
+            o.epsilon_decay_episodes = 1980;
+            o.seed = seed;
+            o.assist = assist;
+            let fast = train_impl(&w, &o, None, None, false).unwrap();
+            let slow = train_impl(&w, &o, None, None, true).unwrap();
+            assert_eq!(fast.q, slow.q);
+            assert_eq!(fast.path, slow.path);
+            assert_eq!(
+                fast.converged_episode, slow.converged_episode,
+                "{name} {seed}"
+            );
+        }
+    }
+}
