@@ -10,10 +10,12 @@
 //! - [`grid`] — the terminal's grid world: actions, collisions, rewards (eqs. 5, 9, 10), BFS.
 //! - [`qlearning`] — tabular Q-learning (eqs. 6-8), learned path, Q-table files.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
+//! - [`env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 
+pub mod env;
 pub mod error;
 pub mod grid;
 pub mod kinematics;

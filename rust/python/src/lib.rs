@@ -8,8 +8,10 @@ use pyo3::prelude::*;
 
 mod arm;
 mod convert;
+mod env_core;
 mod errors;
 mod scenario;
+mod train;
 
 /// Raise the Python exception of one core error variant (for the tests of the mapping).
 /// `kind` is the variant's name: `InvalidScenario`, `ScenarioParse`, `ScenarioNotFound`,
@@ -45,6 +47,14 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_class::<scenario::PyScenario>()?;
     m.add_class::<arm::PyArm>()?;
+    m.add_class::<train::PyTrainResult>()?;
+    m.add_class::<env_core::PyEnvCore>()?;
+    m.add_class::<env_core::PyVecEnvCore>()?;
+    m.add_function(wrap_pyfunction!(train::train, m)?)?;
+    m.add_function(wrap_pyfunction!(train::load_q, m)?)?;
+    m.add_function(wrap_pyfunction!(train::greedy_path_of, m)?)?;
+    m.add_function(wrap_pyfunction!(train::shortest_path, m)?)?;
+    m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     m.add("DEFAULT_SCENARIO", scenario::DEFAULT_SCENARIO)?;
     m.add_function(wrap_pyfunction!(_raise_core_error, m)?)?;
     Ok(())
