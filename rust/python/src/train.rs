@@ -125,11 +125,12 @@ impl PyTrainResult {
     }
     fn __repr__(&self) -> String {
         format!(
-            "TrainResult(success={}, path_len={}, episodes={}, converged_episode={:?}, total_steps={}, wall_time_s={:.3})",
-            self.path.is_some(),
+            "TrainResult(success={}, path_len={}, episodes={}, converged_episode={}, total_steps={}, wall_time_s={:.3})",
+            if self.path.is_some() { "True" } else { "False" },
             self.path.as_ref().map_or(0, |p| p.len()),
             self.steps_per_episode.len(),
-            self.converged_episode,
+            self.converged_episode
+                .map_or_else(|| "None".to_string(), |e| e.to_string()),
             self.total_steps,
             self.wall_time_s
         )
