@@ -8,7 +8,7 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-import sixaxis_avoid  # noqa: E402  (registers the ids)
+import sixaxis_avoid
 
 
 @pytest.fixture(scope="session")

@@ -7,10 +7,9 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+import sixaxis_avoid as sa
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
-
-import sixaxis_avoid as sa
 
 # Every registered variant and observation type (arm-aware ids are added when the build
 # has a pose planner).
@@ -62,14 +61,14 @@ def test_registration_and_spaces(paper_simple):
 
 def test_shortest_path_reaches_target_with_paper_rewards(paper_simple):
     env = gym.make("SixAxisAvoid-v0")
-    obs, info = env.reset(seed=0)
+    _, info = env.reset(seed=0)
     assert info["cell"] == (0, -2, 4)
     path = sa.shortest_path(paper_simple)
     assert path[0] == (0, -2, 4) and path[-1] == (0, 3, 0)
     r = paper_simple.rewards
     d_o = float(np.linalg.norm(np.subtract((0, 3, 0), (0, -2, 4))))
     for i, (a, b) in enumerate(zip(path[:-1], path[1:])):
-        obs, reward, terminated, truncated, info = env.step(ACTIONS[tuple(np.subtract(b, a))])
+        _, reward, terminated, truncated, info = env.step(ACTIONS[tuple(np.subtract(b, a))])
         d_t = float(np.linalg.norm(np.subtract((0, 3, 0), b)))
         last = i == len(path) - 2
         base = r["target_reward"] if last else -r["step_penalty"]
@@ -85,16 +84,21 @@ def test_collision_stays_and_detour_penalties(paper_simple):
     r = paper_simple.rewards
     # Start (0,-2,4) is on the top layer (z max 5): +z twice -> second move hits the wall.
     env.step(4)
-    _, r1, _, _, i1 = env.step(4)
+    *_, i1 = env.step(4)
     assert i1["collided"] and i1["cell"] == (0, -2, 5)
-    _, r2, _, _, i2 = env.step(4)  # collides again: eq. 9 repeat penalty
+    *_, i2 = env.step(4)  # collides again: eq. 9 repeat penalty
     assert i2["collided"] and i2["detour_penalty"] == -r["repeat_collision_penalty"]
-    _, r3, _, _, i3 = env.step(5)  # opposite of the colliding action: reverse penalty
+    *_, i3 = env.step(5)  # opposite of the colliding action: reverse penalty
     assert not i3["collided"] and i3["detour_penalty"] == -r["reverse_after_collision_penalty"]
     env_off = gym.make("SixAxisAvoid-v0", scenario=paper_simple, assist=False).unwrapped
     env_off.reset(seed=0)
     rewards = [env_off.step(a)[1] for a in (4, 4, 4, 5)]
-    assert rewards == [-r["step_penalty"], -r["collision_penalty"], -r["collision_penalty"], -r["step_penalty"]]
+    assert rewards == [
+        -r["step_penalty"],
+        -r["collision_penalty"],
+        -r["collision_penalty"],
+        -r["step_penalty"],
+    ]
 
 
 def test_observation_layout(paper_simple):
@@ -169,11 +173,11 @@ def test_compute_reward_matches_step_rewards(near_target, random_target):
     env = gym.make(
         "SixAxisAvoid-v0", obs_type="goal", random_target=random_target, scenario=near_target
     ).unwrapped
-    obs, _ = env.reset(seed=3)
+    env.reset(seed=3)
     rng = np.random.default_rng(1)
     ach, des, infos, rewards = [], [], [], []
     for a in rng.integers(0, 6, size=400):
-        nobs, reward, term, trunc, info = env.step(int(a))
+        nobs, reward, term, _, info = env.step(int(a))
         ach.append(nobs["achieved_goal"])
         des.append(nobs["desired_goal"])
         infos.append(info)

@@ -7,7 +7,6 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-
 import sixaxis_avoid as sa
 from sixaxis_avoid import _core
 
@@ -96,7 +95,9 @@ def test_bad_keyword_raises_clear_error(kwargs, name, value, mode):
         if mode == "single":
             gym.make("SixAxisAvoid-v0", **kwargs)
         else:
-            gym.make_vec("SixAxisAvoid-v0", num_envs=2, vectorization_mode="vector_entry_point", **kwargs)
+            gym.make_vec(
+                "SixAxisAvoid-v0", num_envs=2, vectorization_mode="vector_entry_point", **kwargs
+            )
     assert isinstance(info.value, sa.InvalidArgumentError)
     assert value in str(info.value)
 
@@ -106,7 +107,10 @@ def test_bad_num_envs_and_max_steps():
         gym.make_vec("SixAxisAvoid-v0", num_envs=0, vectorization_mode="vector_entry_point")
     with pytest.raises(sa.InvalidArgumentError, match="max_episode_steps"):
         gym.make_vec(
-            "SixAxisAvoid-v0", num_envs=2, vectorization_mode="vector_entry_point", max_episode_steps=0
+            "SixAxisAvoid-v0",
+            num_envs=2,
+            vectorization_mode="vector_entry_point",
+            max_episode_steps=0,
         )
 
 
@@ -120,8 +124,16 @@ def _bad(paper_simple, **changes):
     ("make_dict", "cls", "words"),
     [
         (lambda s: _bad(s, colour="red"), sa.ScenarioParseError, ["colour"]),
-        (lambda s: _bad(s, terminal_safe_distance=math.nan), sa.ScenarioError, ["terminal_safe_distance", "NaN"]),
-        (lambda s: _bad(s, arm_safe_distance=math.inf), sa.ScenarioError, ["arm_safe_distance", "inf"]),
+        (
+            lambda s: _bad(s, terminal_safe_distance=math.nan),
+            sa.ScenarioError,
+            ["terminal_safe_distance", "NaN"],
+        ),
+        (
+            lambda s: _bad(s, arm_safe_distance=math.inf),
+            sa.ScenarioError,
+            ["arm_safe_distance", "inf"],
+        ),
         (lambda s: _bad(s, start=[0, 1, 0]), sa.ScenarioError, ["start", "[0, 1, 0]", "obstacle"]),
         (lambda s: _bad(s, target=[0, 1, 1]), sa.ScenarioError, ["target", "[0, 1, 1]"]),
         (lambda s: _bad(s, target=[9, 9, 9]), sa.ScenarioError, ["target", "outside bounds"]),

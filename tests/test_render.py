@@ -6,7 +6,6 @@ import time
 
 import gymnasium as gym
 import numpy as np
-
 import sixaxis_avoid  # noqa: F401
 from sixaxis_avoid import render as R
 

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
-from stable_baselines3 import DQN
-
 import sixaxis_avoid  # noqa: F401
+from stable_baselines3 import DQN
 
 
 def test_dqn_2000_steps():

@@ -8,7 +8,6 @@ import pickle
 
 import numpy as np
 import pytest
-
 import sixaxis_avoid as sa
 
 
@@ -23,7 +22,7 @@ def test_builtins_and_properties(paper_simple):
     assert paper_simple.arm_safe_distance == 0.76
     assert paper_simple.cell_mm == 100.0
     assert paper_simple.rewards["target_reward"] == 20000.0
-    assert "Scenario(name=\"paper_simple\"" in repr(paper_simple)
+    assert 'Scenario(name="paper_simple"' in repr(paper_simple)
 
 
 def test_round_trips(paper_simple, tmp_path):

@@ -5,9 +5,8 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.vector import AutoresetMode
-
 import sixaxis_avoid as sa
+from gymnasium.vector import AutoresetMode
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
 N = 6
@@ -43,12 +42,16 @@ def test_make_vec_gives_native_env(paper_simple):
 
 
 @pytest.mark.parametrize(
-    ("obs_type", "random_target"), [("vector", False), ("vector", True), ("index", False), ("goal", True)]
+    ("obs_type", "random_target"),
+    [("vector", False), ("vector", True), ("index", False), ("goal", True)],
 )
 def test_native_matches_single_envs_step_for_step(near_target, obs_type, random_target):
     kw = {"obs_type": obs_type, "random_target": random_target}
     native = _native(near_target, **kw)
-    singles = [gym.make("SixAxisAvoid-v0", scenario=near_target, max_episode_steps=CAP, **kw) for _ in range(N)]
+    singles = [
+        gym.make("SixAxisAvoid-v0", scenario=near_target, max_episode_steps=CAP, **kw)
+        for _ in range(N)
+    ]
     rng = np.random.default_rng(5)
 
     def stack(xs):
@@ -131,7 +134,7 @@ def test_reset_mask(near_target):
     before, *_ = env.step(np.full(N, 4))  # everyone moves +z
     mask = np.zeros(N, dtype=bool)
     mask[[0, 3]] = True
-    obs, info = env.reset(options={"reset_mask": mask})
+    obs, _ = env.reset(options={"reset_mask": mask})
     start = gym.make("SixAxisAvoid-v0", scenario=near_target).reset(seed=0)[0]
     np.testing.assert_array_equal(obs[mask], np.stack([start, start]))
     np.testing.assert_array_equal(obs[~mask], before[~mask])

@@ -162,13 +162,18 @@ class SixAxisAvoidEnv(gym.Env):
         arm_aware = check_bool("arm_aware", arm_aware)
         render_arm = check_bool("render_arm", render_arm)
         check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
-        if isinstance(render_size, bool) or not isinstance(render_size, int) or not 64 <= render_size <= 4096:
+        if (
+            isinstance(render_size, bool)
+            or not isinstance(render_size, int)
+            or not 64 <= render_size <= 4096
+        ):
             raise invalid("render_size", render_size, "must be an integer in 64..=4096")
         if random_target and obs_type == "index":
             raise invalid(
                 "random_target",
                 random_target,
-                'needs obs_type "vector" or "goal" (the "index" observation does not show the target)',
+                'needs obs_type "vector" or "goal" '
+                '(the "index" observation does not show the target)',
             )
 
         self.scenario: _core.Scenario = as_scenario(scenario)
@@ -235,7 +240,8 @@ class SixAxisAvoidEnv(gym.Env):
     def render(self):
         if self.render_mode is None:
             gym.logger.warn(
-                "Calling render() without a render_mode; pass render_mode='rgb_array' or 'human' to gym.make."
+                "Calling render() without a render_mode; "
+                "pass render_mode='rgb_array' or 'human' to gym.make."
             )
             return None
         if self.render_mode == "rgb_array":
@@ -251,7 +257,11 @@ class SixAxisAvoidEnv(gym.Env):
     # Goal-conditioned API ---------------------------------------------------------------
     @staticmethod
     def _goal_obs(obs: np.ndarray) -> dict[str, np.ndarray]:
-        return {"observation": obs, "achieved_goal": obs[0:3].copy(), "desired_goal": obs[3:6].copy()}
+        return {
+            "observation": obs,
+            "achieved_goal": obs[0:3].copy(),
+            "desired_goal": obs[3:6].copy(),
+        }
 
     def goal_to_cell(self, goal: np.ndarray) -> np.ndarray:
         """Normalised goal(s) ``(..., 3)`` -> integer cells ``(..., 3)``."""
@@ -315,8 +325,12 @@ class SixAxisAvoidEnv(gym.Env):
         from sixaxis_avoid.render import HumanWindow
 
         if self._window is None:
-            self._window = HumanWindow(f"SixAxisAvoid: {self.scenario.name}", self.metadata["render_fps"])
-        caption = f"step {self._core.steps}  cell {self._core.cell}  target {self._core.target_cell}"
+            self._window = HumanWindow(
+                f"SixAxisAvoid: {self.scenario.name}", self.metadata["render_fps"]
+            )
+        caption = (
+            f"step {self._core.steps}  cell {self._core.cell}  target {self._core.target_cell}"
+        )
         self._window.show(self._frame(), caption)
 
 
@@ -347,7 +361,9 @@ class SixAxisAvoidGoalEnv(SixAxisAvoidEnv):
             infos = list(np.asarray(info, dtype=object).ravel())
             shape = a.shape[:-1]
             collided = np.array([i["collided"] for i in infos], dtype=bool).reshape(shape)
-            detour = np.array([i.get("detour_penalty", 0.0) for i in infos], dtype=np.float64).reshape(shape)
+            detour = np.array(
+                [i.get("detour_penalty", 0.0) for i in infos], dtype=np.float64
+            ).reshape(shape)
         r = self._rewards
         reached = np.all(a == d, axis=-1)
         reward = np.where(

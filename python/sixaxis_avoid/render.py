@@ -160,8 +160,8 @@ class IsoRenderer:
         extent = pr.max(axis=0) - pr.min(axis=0)
         margin = 12
         self.scale = (size - 2 * margin) / float(max(extent))
-        self.width = int(math.ceil(extent[0] * self.scale)) + 2 * margin
-        self.height = int(math.ceil(extent[1] * self.scale)) + 2 * margin
+        self.width = math.ceil(extent[0] * self.scale) + 2 * margin
+        self.height = math.ceil(extent[1] * self.scale) + 2 * margin
         self._origin = -pr.min(axis=0) * self.scale + margin
         self._cos30 = cos30
 
@@ -202,13 +202,21 @@ class IsoRenderer:
         lo, hi = self._lo, self._hi
         z = lo[2] - 0.5
         for x in np.arange(lo[0] - 0.5, hi[0] + 1.0):
-            _line(img, self.project((x, lo[1] - 0.5, z)), self.project((x, hi[1] + 0.5, z)), 1, FLOOR)
+            _line(
+                img, self.project((x, lo[1] - 0.5, z)), self.project((x, hi[1] + 0.5, z)), 1, FLOOR
+            )
         for y in np.arange(lo[1] - 0.5, hi[1] + 1.0):
-            _line(img, self.project((lo[0] - 0.5, y, z)), self.project((hi[0] + 0.5, y, z)), 1, FLOOR)
+            _line(
+                img, self.project((lo[0] - 0.5, y, z)), self.project((hi[0] + 0.5, y, z)), 1, FLOOR
+            )
         # The three back edges of the bounds box.
         x0, y0, z0 = lo - 0.5
         x1, y1, z1 = hi + 0.5
-        for a, b in (((x0, y0, z0), (x0, y0, z1)), ((x0, y0, z1), (x1, y0, z1)), ((x0, y0, z1), (x0, y1, z1))):
+        for a, b in (
+            ((x0, y0, z0), (x0, y0, z1)),
+            ((x0, y0, z1), (x1, y0, z1)),
+            ((x0, y0, z1), (x0, y1, z1)),
+        ):
             _line(img, self.project(a), self.project(b), 1, BOX)
         for a, b in (((x1, y0, z0), (x1, y0, z1)), ((x0, y1, z0), (x0, y1, z1))):
             _line(img, self.project(a), self.project(b), 1, BOX)
@@ -229,8 +237,10 @@ class IsoRenderer:
     # Frames -----------------------------------------------------------------------------
     def _update_path(self, path: Sequence[Cell]) -> None:
         n = len(self._path_drawn)
-        if n > len(path) or (n and tuple(path[n - 1]) != self._path_drawn[-1]) or (
-            n and tuple(path[0]) != self._path_drawn[0]
+        if (
+            n > len(path)
+            or (n and tuple(path[n - 1]) != self._path_drawn[-1])
+            or (n and tuple(path[0]) != self._path_drawn[0])
         ):
             self._path_layer = self.background.copy()
             self._path_drawn = []
@@ -239,7 +249,13 @@ class IsoRenderer:
             return
         pts = [self.project(c) for c in path[max(n - 1, 0) :]]
         if len(pts) == 1:
-            _stamp(self._path_layer, np.array([pts[0][0]]), np.array([pts[0][1]]), self._path_width, PATH)
+            _stamp(
+                self._path_layer,
+                np.array([pts[0][0]]),
+                np.array([pts[0][1]]),
+                self._path_width,
+                PATH,
+            )
         for a, b in zip(pts[:-1], pts[1:]):
             _line(self._path_layer, a, b, self._path_width, PATH)
         self._path_drawn.extend(tuple(int(v) for v in c) for c in path[n:])
@@ -289,7 +305,14 @@ class HumanWindow:
         import matplotlib.pyplot as plt
 
         self._plt = plt
-        self._interactive = matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "ps", "cairo", "template")
+        self._interactive = matplotlib.get_backend().lower() not in (
+            "agg",
+            "pdf",
+            "svg",
+            "ps",
+            "cairo",
+            "template",
+        )
         self._fps = fps
         self._fig, self._ax = plt.subplots(num=title)
         self._ax.set_axis_off()

@@ -83,7 +83,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             raise invalid(
                 "random_target",
                 random_target,
-                'needs obs_type "vector" or "goal" (the "index" observation does not show the target)',
+                'needs obs_type "vector" or "goal" '
+                '(the "index" observation does not show the target)',
             )
         self.scenario = as_scenario(scenario)
         if max_episode_steps is None:
@@ -167,7 +168,9 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             "_is_success": m,
         }
 
-    def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ):
         super().reset(seed=seed if isinstance(seed, (int, np.integer)) else None)
         self._seed(seed)
         mask = None

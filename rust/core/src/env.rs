@@ -302,7 +302,8 @@ impl Episode {
     /// Distance from the terminal to the target, cells.
     #[inline]
     pub fn distance_to_target(&self, model: &EnvModel) -> f64 {
-        self.world(model).distance_to_target_cells(self.state as usize)
+        self.world(model)
+            .distance_to_target_cells(self.state as usize)
     }
 
     /// `d_o`: distance from the start to this episode's target, cells.
@@ -516,12 +517,12 @@ impl BatchEnv {
             }
         }
         let model = Arc::clone(&self.model);
-        for i in 0..n {
+        for (i, &action) in actions.iter().enumerate() {
             if self.needs_reset[i] {
                 self.reset_one(i, &mut buf);
                 continue;
             }
-            let a = actions[i].try_into().unwrap_or(0);
+            let a = action.try_into().unwrap_or(0);
             let ep = &mut self.episodes[i];
             let out = ep.step(&model, a);
             let truncated = !out.reached && ep.steps >= self.max_episode_steps;
@@ -599,8 +600,13 @@ mod tests {
         let mut b = BatchEnv::new(m, n, 4).unwrap();
         b.seed(&[1, 2, 3]).unwrap();
         let mut obs = vec![0f32; n * VECTOR_OBS_DIM];
-        let (mut r, mut te, mut tr, mut co, mut d) =
-            (vec![0.0; n], vec![false; n], vec![false; n], vec![false; n], vec![0.0; n]);
+        let (mut r, mut te, mut tr, mut co, mut d) = (
+            vec![0.0; n],
+            vec![false; n],
+            vec![false; n],
+            vec![false; n],
+            vec![0.0; n],
+        );
         let mut cells = vec![0i32; 3 * n];
         macro_rules! bufs {
             () => {

@@ -11,7 +11,13 @@ use crate::errors::invalid_argument;
 /// Python object -> JSON value; `path` is the dotted field name used in errors.
 /// Non-finite floats are rejected here (JSON has no NaN) with an error naming the field.
 pub fn py_to_json(obj: &Bound<'_, PyAny>, path: &str) -> Result<Value, Error> {
-    let field = |p: &str| if p.is_empty() { "<root>".to_string() } else { p.to_string() };
+    let field = |p: &str| {
+        if p.is_empty() {
+            "<root>".to_string()
+        } else {
+            p.to_string()
+        }
+    };
     if obj.is_none() {
         return Ok(Value::Null);
     }
@@ -59,7 +65,11 @@ pub fn py_to_json(obj: &Bound<'_, PyAny>, path: &str) -> Result<Value, Error> {
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
         let mut out = Vec::new();
-        for (i, item) in obj.try_iter().map_err(|_| parse_err(path, obj))?.enumerate() {
+        for (i, item) in obj
+            .try_iter()
+            .map_err(|_| parse_err(path, obj))?
+            .enumerate()
+        {
             let item = item.map_err(|_| parse_err(path, obj))?;
             out.push(py_to_json(&item, &format!("{}[{i}]", field(path)))?);
         }
@@ -79,7 +89,10 @@ pub fn py_to_json(obj: &Bound<'_, PyAny>, path: &str) -> Result<Value, Error> {
         }
     }
     if obj.hasattr("__float__").unwrap_or(false) {
-        if let Ok(v) = obj.call_method0("__float__").and_then(|f| f.extract::<f64>()) {
+        if let Ok(v) = obj
+            .call_method0("__float__")
+            .and_then(|f| f.extract::<f64>())
+        {
             return float(v, &field(path));
         }
     }
@@ -94,7 +107,10 @@ pub fn py_to_json(obj: &Bound<'_, PyAny>, path: &str) -> Result<Value, Error> {
         }
     }
     if obj.hasattr("__fspath__").unwrap_or(false) {
-        if let Ok(s) = obj.call_method0("__fspath__").and_then(|s| s.extract::<String>()) {
+        if let Ok(s) = obj
+            .call_method0("__fspath__")
+            .and_then(|s| s.extract::<String>())
+        {
             return Ok(Value::String(s));
         }
     }
@@ -212,9 +228,9 @@ pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 3]> {
 /// A grid cell from any sequence of 3 integers.
 pub fn cell(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Cell> {
     let py = obj.py();
-    let v: Vec<i64> = obj.extract().map_err(|_| {
-        invalid_argument(py, name, repr(obj), "must be a sequence of 3 integers")
-    })?;
+    let v: Vec<i64> = obj
+        .extract()
+        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 3 integers"))?;
     if v.len() != 3 {
         return Err(invalid_argument(
             py,

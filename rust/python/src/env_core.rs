@@ -459,10 +459,8 @@ impl PyVecEnvCore {
     fn reset(&mut self, py: Python<'_>, mask: Option<PyReadonlyArray1<'_, bool>>) -> PyResult<()> {
         let mask_vec: Option<Vec<bool>> = mask.map(|m| m.as_array().to_vec());
         let batch = &mut self.batch;
-        with_buffers!(self, py, |bufs| run(py, || batch.reset(
-            mask_vec.as_deref(),
-            bufs
-        )))
+        with_buffers!(self, py, |bufs| run(py, || batch
+            .reset(mask_vec.as_deref(), bufs)))
     }
 
     /// Step all envs with `actions` (int64, one per env), writing into the buffers; the GIL

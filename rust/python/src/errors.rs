@@ -205,12 +205,7 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
             let filename = path.display().to_string();
             match source.raw_os_error() {
                 Some(errno) => build(py, &IO_ERROR, (errno, msg, filename), &[]),
-                None => build(
-                    py,
-                    &IO_ERROR,
-                    (msg,),
-                    &[("filename", s(py, &filename))],
-                ),
+                None => build(py, &IO_ERROR, (msg,), &[("filename", s(py, &filename))]),
             }
         }
     }

@@ -292,10 +292,7 @@ impl PyScenario {
         let ctor = cls.getattr("from_json")?;
         PyTuple::new(
             py,
-            [
-                ctor,
-                PyTuple::new(py, [self.inner.to_json()])?.into_any(),
-            ],
+            [ctor, PyTuple::new(py, [self.inner.to_json()])?.into_any()],
         )
     }
 }

@@ -145,7 +145,12 @@ fn world_of(
     let mut extra = Vec::new();
     if let Some(obj) = extra_obstacles.filter(|o| !o.is_none()) {
         for item in obj.try_iter().map_err(|_| {
-            invalid_argument(py, "extra_obstacles", repr(obj), "must be a sequence of cells")
+            invalid_argument(
+                py,
+                "extra_obstacles",
+                repr(obj),
+                "must be a sequence of cells",
+            )
         })? {
             extra.push(cell(&item?, "extra_obstacles")?);
         }
