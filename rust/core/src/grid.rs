@@ -7,6 +7,15 @@
 //! - [`GridWorld::step`] — one move of the terminal with its [`Transition`] and reward.
 //! - [`GridWorld::shortest_path`] — breadth-first shortest path over free cells.
 //!
+//! ```
+//! use sixaxis_core::grid::{Assist, GridWorld};
+//! use sixaxis_core::Scenario;
+//! let world = GridWorld::new(&Scenario::builtin("paper_simple").unwrap()).unwrap();
+//! assert_eq!(world.shortest_path().unwrap().len() - 1, 9); // steps (0,-2,4) -> (0,3,0)
+//! let t = world.step(world.start(), 5, None, Assist::off()); // -z
+//! assert_eq!((t.reward, t.collided), (-15000.0, false));
+//! ```
+//!
 //! # Semantics (SPEC section 2)
 //!
 //! - **States** are the cells inside `bounds` (inclusive box), numbered row-major over
@@ -588,13 +597,11 @@ mod tests {
 
     #[test]
     fn opposite_pairs() {
-        for a in 0..6 {
+        for (a, m) in ACTIONS.iter().enumerate() {
             let o = opposite(a);
             assert_ne!(a, o);
             assert_eq!(opposite(o), a);
-            for i in 0..3 {
-                assert_eq!(ACTIONS[a][i], -ACTIONS[o][i]);
-            }
+            assert_eq!(m.map(|v| -v), ACTIONS[o]);
         }
     }
 

@@ -7,16 +7,30 @@
 //! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
 //! - [`QTable::save`] / [`QTable::load`] — atomic Q-table files, checked against the world.
 //!
+//! ```
+//! use sixaxis_core::grid::GridWorld;
+//! use sixaxis_core::qlearning::{train, TrainOptions};
+//! use sixaxis_core::Scenario;
+//! let s = Scenario::builtin("paper_simple").unwrap();
+//! let world = GridWorld::new(&s).unwrap();
+//! let mut opts = TrainOptions::from_scenario(&s); // the paper's 10,000 episodes ...
+//! opts.episodes = 200; // ... fewer here
+//! let r = train(&world, &opts, None, None).unwrap();
+//! assert_eq!(r.steps_per_episode.len(), 200);
+//! ```
+//!
 //! # Choices where the SPEC is silent
 //!
 //! - **Episodes are counted from 0**: episode `eta` in `0..episodes` explores with
 //!   `epsilon = epsilon_start * (1 - eta / M)` for `eta <= M`, else 0
 //!   (`M = epsilon_decay_episodes`; `M = 0` means no exploration at all). With the paper's
 //!   M = 9900 and 10,000 episodes, episodes 9900..=9999 are purely greedy.
-//! - **Action selection** per step: if `epsilon > 0`, draw `u` uniform in [0, 1); if
-//!   `u < epsilon` take an action uniformly from all six. Otherwise take the greedy action;
-//!   when several actions share the maximal Q-value, one of them is drawn uniformly (a draw
-//!   is made only when there is a tie). All draws come from one
+//! - **Action selection** per step: if `epsilon > 0`, draw `k = next_u32()` and explore if
+//!   `k < ceil(epsilon * 2^32)` (that is `u < epsilon` for `u = k / 2^32` uniform in
+//!   [0, 1)): then take an action uniformly from all six (`random_range(0..6u32)`). Otherwise take the greedy action;
+//!   when several actions share the maximal Q-value, one of them is drawn uniformly
+//!   (`random_range(0..ties)` over the tied actions in index order; a draw is made only
+//!   when there is a tie). All draws come from one
 //!   `ChaCha8Rng::seed_from_u64(seed)` per call of [`train`], in this order, so a run is
 //!   fully determined by (world, options, initial Q-table).
 //! - **Episode end**: on reaching the target (terminal state: the update does not
@@ -34,7 +48,10 @@
 //!   compared with the path after the one before, ..., and with the path of the initial
 //!   Q-table for episode 0; if it never changed, the answer is 0. The learner recomputes
 //!   the greedy path only after an episode whose updates changed the greedy action of a
-//!   state the current rollout consults, which is exact and cheap.
+//!   state the current rollout consults, which is exact and cheap. Late changes are
+//!   usually swaps between equally short paths whose Q-values are still settling, so
+//!   [`TrainResult::length_converged_episode`] also reports the first episode from which
+//!   the path's length no longer changed.
 //! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
 //!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
 //!   epsilon schedule) count from 0 again, and the converged episode is an index of this
@@ -62,7 +79,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use rand::{Rng, SeedableRng};
+use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -149,26 +166,48 @@ pub struct QTable {
 }
 
 /// Index of the largest value, lowest index on ties.
-#[inline]
+#[inline(always)]
 fn argmax_lowest(row: &[f64; NUM_ACTIONS]) -> usize {
-    let mut best = 0;
-    for a in 1..NUM_ACTIONS {
-        if row[a] > row[best] {
-            best = a;
-        }
-    }
-    best
+    max_mask(row).trailing_zeros() as usize
 }
 
-#[inline]
-fn row_max(row: &[f64; NUM_ACTIONS]) -> f64 {
-    let mut m = row[0];
-    for &v in &row[1..] {
-        if v > m {
-            m = v;
-        }
+/// Bit `a` set for every action of maximal value (branch-free).
+#[inline(always)]
+fn max_mask(row: &[f64; NUM_ACTIONS]) -> u32 {
+    mask_of(row, row_max(row))
+}
+
+/// Bit `a` set for every action whose value equals `m`.
+#[inline(always)]
+fn mask_of(row: &[f64; NUM_ACTIONS], m: f64) -> u32 {
+    let mut mask = 0u32;
+    for (i, &v) in row.iter().enumerate() {
+        mask |= ((v == m) as u32) << i;
     }
-    m
+    mask
+}
+
+/// Index of the `n`-th set bit (from 0, lowest first) of `mask`.
+#[inline]
+fn nth_set_bit(mut mask: u32, n: u32) -> usize {
+    for _ in 0..n {
+        mask &= mask - 1;
+    }
+    mask.trailing_zeros() as usize
+}
+
+#[inline(always)]
+fn row_max(row: &[f64; NUM_ACTIONS]) -> f64 {
+    // A tree (depth 3, not a chain of 5): the value is the same, the latency shorter.
+    let a = if row[1] > row[0] { row[1] } else { row[0] };
+    let b = if row[3] > row[2] { row[3] } else { row[2] };
+    let c = if row[5] > row[4] { row[5] } else { row[4] };
+    let ab = if b > a { b } else { a };
+    if c > ab {
+        c
+    } else {
+        ab
+    }
 }
 
 /// Eq. 6: `old + alpha * (reward + gamma * bootstrap - old)`.
@@ -446,6 +485,9 @@ pub struct TrainResult {
     /// First episode (from 0) from which the greedy path no longer changed; `None` if the
     /// final path fails.
     pub converged_episode: Option<u32>,
+    /// First episode (from 0) from which the greedy path's *length* no longer changed
+    /// (later changes, if any, swap equally long paths); `None` if the final path fails.
+    pub length_converged_episode: Option<u32>,
     /// Environment steps over all episodes.
     pub total_steps: u64,
     /// Wall time of the call, seconds.
@@ -545,10 +587,16 @@ fn train_impl(
         None => QTable::zeros(n),
     };
 
-    // Reward of (s, a) without eq. 9, and eq. 9's two penalties.
+    // Rewards, computed exactly as `GridWorld::step` does: eq. 5 by kind of move
+    // (plain, collision, reaching), plus eq. 10 by new state, plus eq. 9.
     let assist = opts.assist;
-    let reward_table: Vec<[f64; NUM_ACTIONS]> = (0..n)
-        .map(|s| std::array::from_fn(|a| world.base_reward(s, a, assist)))
+    let rw = world.rewards();
+    let eq5 = [-rw.step_penalty, -rw.collision_penalty, rw.target_reward];
+    let distance = assist.distance;
+    let eq10: Vec<f64> = (0..n)
+        .map(|s| {
+            rw.distance_reward * (world.start_distance_cells() - world.distance_to_target_cells(s))
+        })
         .collect();
     let detour = assist.detour;
     let repeat_pen = -world.rewards().repeat_collision_penalty;
@@ -577,45 +625,41 @@ fn train_impl(
     );
     let mut new_path = Vec::new();
     let mut last_change = 0u32;
+    let mut last_length_change = 0u32;
 
     const NO_ACTION: usize = usize::MAX;
     let qr = &mut q.rows;
     for ep in 0..episodes {
-        let eps = opts.epsilon(ep);
+        // Explore when a uniform u32 is below epsilon * 2^32 (i.e. u < epsilon for
+        // u = k / 2^32 uniform in [0, 1)).
+        let explore_threshold = (opts.epsilon(ep) * 4_294_967_296.0).ceil() as u64;
         let mut s = start;
         let mut last_collided = NO_ACTION;
         let mut steps = 0u32;
         let mut reached = false;
         let mut dirty = rollout_every_episode;
+        // max_a Q(s, a), carried from the previous step's bootstrap when still valid.
+        let mut s_max = row_max(&qr[s]);
         while steps < max_steps {
             // Action selection (eq. 7).
-            let a = if eps > 0.0 && rng.random::<f64>() < eps {
+            let a = if explore_threshold > 0 && (rng.next_u32() as u64) < explore_threshold {
                 rng.random_range(0..NUM_ACTIONS as u32) as usize
             } else {
-                let row = &qr[s];
-                let mut best = row[0];
-                let mut ties = [0u8; NUM_ACTIONS];
-                let mut k = 1usize;
-                for (i, &v) in row.iter().enumerate().skip(1) {
-                    if v > best {
-                        best = v;
-                        ties[0] = i as u8;
-                        k = 1;
-                    } else if v == best {
-                        ties[k] = i as u8;
-                        k += 1;
-                    }
-                }
-                if k == 1 {
-                    ties[0] as usize
+                let mask = mask_of(&qr[s], s_max);
+                if mask & (mask - 1) == 0 {
+                    mask.trailing_zeros() as usize
                 } else {
-                    ties[rng.random_range(0..k as u32) as usize] as usize
+                    nth_set_bit(mask, rng.random_range(0..mask.count_ones()))
                 }
             };
             // Environment step (eqs. 5, 9, 10).
             let ns = next[s][a] as usize;
             let collided = ns == s;
-            let mut reward = reward_table[s][a];
+            reached = ns == target && !collided;
+            let mut reward = eq5[collided as usize + 2 * reached as usize];
+            if distance {
+                reward += eq10[ns];
+            }
             if detour && last_collided != NO_ACTION {
                 if collided {
                     reward += repeat_pen;
@@ -623,14 +667,16 @@ fn train_impl(
                     reward += reverse_pen;
                 }
             }
-            reached = ns == target && !collided;
             // Q-update (eq. 6).
-            let bootstrap = if reached { 0.0 } else { row_max(&qr[ns]) };
+            let next_max = row_max(&qr[ns]);
+            let bootstrap = if reached { 0.0 } else { next_max };
             let old = qr[s][a];
             qr[s][a] = updated(old, reward, bootstrap, alpha, gamma);
             if !dirty && stamp[s] == gen && argmax_lowest(&qr[s]) != act[s] as usize {
                 dirty = true;
             }
+            // On a collision ns == s and its row just changed; otherwise row ns is untouched.
+            s_max = if collided { row_max(&qr[s]) } else { next_max };
             last_collided = if collided { a } else { NO_ACTION };
             steps += 1;
             s = ns;
@@ -642,6 +688,10 @@ fn train_impl(
         steps_per_episode.push(steps);
         reached_per_episode.push(reached);
         if dirty {
+            if gen == u32::MAX {
+                stamp.fill(0);
+                gen = 0;
+            }
             gen += 1;
             let ok = rollout(
                 world,
@@ -655,6 +705,9 @@ fn train_impl(
             let same = ok == path_ok && (!ok || new_path == path);
             if !same {
                 last_change = ep;
+                if ok != path_ok || (ok && new_path.len() != path.len()) {
+                    last_length_change = ep;
+                }
             }
             std::mem::swap(&mut path, &mut new_path);
             path_ok = ok;
@@ -672,11 +725,13 @@ fn train_impl(
         None
     };
     let converged_episode = path_ok.then_some(last_change);
+    let length_converged_episode = path_ok.then_some(last_length_change);
     Ok(TrainResult {
         path: final_path,
         steps_per_episode,
         reached_per_episode,
         converged_episode,
+        length_converged_episode,
         total_steps,
         wall_time_s: started.elapsed().as_secs_f64(),
         q,
@@ -708,6 +763,10 @@ mod tests {
         assert_eq!(argmax_lowest(&[0.0, 1.0, 1.0, 0.0, 0.0, 0.0]), 1);
         assert_eq!(argmax_lowest(&[-1.0, -1.0, -1.0, -1.0, -1.0, -0.5]), 5);
         assert_eq!(row_max(&[-3.0, -2.0, -1.0, -4.0, -5.0, -6.0]), -1.0);
+        assert_eq!(max_mask(&[0.0, 1.0, 1.0, 0.0, 1.0, 0.0]), 0b10110);
+        assert_eq!(nth_set_bit(0b10110, 0), 1);
+        assert_eq!(nth_set_bit(0b10110, 1), 2);
+        assert_eq!(nth_set_bit(0b10110, 2), 4);
     }
 
     #[test]
