@@ -18,12 +18,14 @@
 pub mod env;
 pub mod error;
 pub mod grid;
+pub mod ik;
 pub mod kinematics;
 pub mod qlearning;
 pub mod scenario;
 
 pub use error::{Error, Result};
 pub use grid::{Assist, GridWorld, Transition};
+pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
 pub use scenario::{Cell, Scenario};
