@@ -86,3 +86,18 @@ def test_ik_round_trip():
         p2, r2 = arm.fk(s)
         np.testing.assert_allclose(p2, pos, atol=1e-6)
         np.testing.assert_allclose(r2, rot, atol=1e-6)
+
+
+def test_ik_by_rpy_and_errors():
+    arm = sa.Arm()
+    sols = arm.ik([0.0, -200.0, 400.0], rpy_deg=[0.0, 0.0, 0.0])
+    assert 1 <= len(sols) <= 8
+    for q in sols:
+        np.testing.assert_allclose(arm.fk(q)[0], [0.0, -200.0, 400.0], atol=1e-6)
+    assert arm.ik([5000.0, 0.0, 0.0], rpy_deg=[0, 0, 0]).shape == (0, 6)  # out of reach
+    with pytest.raises(sa.InvalidArgumentError, match="rotation"):
+        arm.ik([0.0, -200.0, 400.0])
+    with pytest.raises(sa.InvalidArgumentError, match="rotation"):
+        arm.ik([0.0, -200.0, 400.0], np.eye(3) * 2)
+    with pytest.raises(sa.InvalidArgumentError, match="position_mm"):
+        arm.ik([0.0, math.nan, 400.0], np.eye(3))

@@ -3,10 +3,11 @@
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use sixaxis_core::kinematics::{DhRow, PAPER_DH};
-use sixaxis_core::Arm;
+use sixaxis_core::ik::IK_ROTATION_INPUT_TOL;
+use sixaxis_core::kinematics::{rotation_from_rpy_deg, DhRow, PAPER_DH};
+use sixaxis_core::{Arm, TerminalPose};
 
-use crate::convert::{joints6, repr};
+use crate::convert::{joints6, repr, vec3};
 use crate::errors::invalid_argument;
 use crate::scenario::scenario_from_any;
 
@@ -146,6 +147,73 @@ impl PyArm {
             out[[i, 0]] = p.x;
             out[[i, 1]] = p.y;
             out[[i, 2]] = p.z;
+        }
+        Ok(out.into_pyarray(py))
+    }
+
+    /// Inverse kinematics (eq. 13, closed form): every joint solution (up to 8, radians,
+    /// each in (-pi, pi]) that puts the terminal at ``position_mm`` with orientation
+    /// ``rotation`` (3x3) or ``rpy_deg`` (``R = Rz(rz) Ry(ry) Rx(rx)``, degrees). Returns a
+    /// ``(k, 6)`` array, ``k = 0`` when the pose is out of reach.
+    #[pyo3(signature = (position_mm, rotation = None, *, rpy_deg = None))]
+    fn ik<'py>(
+        &self,
+        py: Python<'py>,
+        position_mm: &Bound<'py, PyAny>,
+        rotation: Option<&Bound<'py, PyAny>>,
+        rpy_deg: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let p = vec3(position_mm, "position_mm")?;
+        let rot = match (
+            rotation.filter(|r| !r.is_none()),
+            rpy_deg.filter(|r| !r.is_none()),
+        ) {
+            (Some(r), None) => {
+                let rows: Vec<Vec<f64>> = r.extract().map_err(|_| {
+                    invalid_argument(py, "rotation", repr(r), "must be a 3x3 matrix")
+                })?;
+                if rows.len() != 3 || rows.iter().any(|row| row.len() != 3) {
+                    return Err(invalid_argument(
+                        py,
+                        "rotation",
+                        repr(r),
+                        "must be a 3x3 matrix",
+                    ));
+                }
+                let m = nalgebra::Matrix3::from_fn(|i, j| rows[i][j]);
+                let err = (m.transpose() * m - nalgebra::Matrix3::identity()).amax();
+                if !(err <= IK_ROTATION_INPUT_TOL) || m.determinant() <= 0.0 {
+                    return Err(invalid_argument(
+                        py,
+                        "rotation",
+                        repr(r),
+                        format!(
+                            "must be a rotation matrix (R^T R = I within {IK_ROTATION_INPUT_TOL}, det R > 0)"
+                        ),
+                    ));
+                }
+                m
+            }
+            (None, Some(r)) => rotation_from_rpy_deg(vec3(r, "rpy_deg")?),
+            _ => {
+                return Err(invalid_argument(
+                    py,
+                    "rotation",
+                    "None",
+                    "give exactly one of `rotation` (3x3) and `rpy_deg` (3 angles)",
+                ))
+            }
+        };
+        let target = TerminalPose {
+            position_mm: nalgebra::Vector3::new(p[0], p[1], p[2]),
+            rotation: rot,
+        };
+        let sols = self.inner.ik(&target);
+        let mut out = Array2::<f64>::zeros((sols.len(), 6));
+        for (i, q) in sols.iter().enumerate() {
+            for j in 0..6 {
+                out[[i, j]] = q[j];
+            }
         }
         Ok(out.into_pyarray(py))
     }
