@@ -22,6 +22,9 @@ pub struct PyArm {
     pub inner: Arm,
 }
 
+/// `(position_mm (3,), rotation (3, 3))`.
+type PoseArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
+
 fn mat3<'py>(py: Python<'py>, m: &nalgebra::Matrix3<f64>) -> Bound<'py, PyArray2<f64>> {
     let mut a = Array2::<f64>::zeros((3, 3));
     for r in 0..3 {
@@ -97,7 +100,7 @@ impl PyArm {
         &self,
         py: Python<'py>,
         joints_rad: &Bound<'py, PyAny>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>)> {
+    ) -> PyResult<PoseArrays<'py>> {
         let q = joints6(joints_rad, "joints_rad")?;
         let pose = self.inner.fk(&q);
         let p = pose.position_mm;
@@ -182,7 +185,7 @@ impl PyArm {
                 }
                 let m = nalgebra::Matrix3::from_fn(|i, j| rows[i][j]);
                 let err = (m.transpose() * m - nalgebra::Matrix3::identity()).amax();
-                if !(err <= IK_ROTATION_INPUT_TOL) || m.determinant() <= 0.0 {
+                if err.is_nan() || err > IK_ROTATION_INPUT_TOL || m.determinant() <= 0.0 {
                     return Err(invalid_argument(
                         py,
                         "rotation",

@@ -194,7 +194,11 @@ impl PyEnvCore {
 
     /// Start a new episode: ``(observation, info)``.
     fn reset<'py>(&mut self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-        self.ep.reset(&self.model);
+        let (ep, model) = (&mut self.ep, &self.model);
+        run_attached(py, || {
+            ep.reset(model);
+            Ok(())
+        })?;
         self.path.clear();
         self.path.push(self.ep.state() as u32);
         Ok((self.observation(py)?, self.info(py, false, false, 0.0)?))
@@ -207,7 +211,8 @@ impl PyEnvCore {
         action: &Bound<'py, PyAny>,
     ) -> PyResult<(Bound<'py, PyAny>, f64, bool, Bound<'py, PyDict>)> {
         let a = action_of(py, action)?;
-        let out = self.ep.step(&self.model, a);
+        let (ep, model) = (&mut self.ep, &self.model);
+        let out = run_attached(py, || Ok(ep.step(model, a)))?;
         if self.track_path && !out.collided {
             self.path.push(self.ep.state() as u32);
         }
