@@ -10,11 +10,13 @@
 //! - [`grid`] — the terminal's grid world: actions, collisions, rewards (eqs. 5, 9, 10), BFS.
 //! - [`qlearning`] — tabular Q-learning (eqs. 6-8), learned path, Q-table files.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
+//! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
 //! - [`env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 
+pub mod clearance;
 pub mod env;
 pub mod error;
 pub mod grid;
@@ -23,6 +25,7 @@ pub mod kinematics;
 pub mod qlearning;
 pub mod scenario;
 
+pub use clearance::Clearance;
 pub use error::{Error, Result};
 pub use grid::{Assist, GridWorld, Transition};
 pub use ik::{check_closed_form_family, IkSolutions};
