@@ -214,6 +214,7 @@ class SixAxisAvoidEnv(gym.Env):
         self._assist = self._core.assist
         self._renderer = None
         self._window = None
+        self._warned_info = False
 
     # Gymnasium API ----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -351,19 +352,35 @@ class SixAxisAvoidGoalEnv(SixAxisAvoidEnv):
         that step; with another ``desired_goal`` it is the reward the same move would have
         earned for that target (HER relabelling). ``info`` is the step's info dict or a
         sequence of them (its ``collided`` and ``detour_penalty`` are used).
+
+        SB3's ``HerReplayBuffer`` passes empty info dicts unless made with
+        ``replay_buffer_kwargs={"copy_info_dict": True}``; without them the reward is
+        computed as if the step had not collided and had no eq. 9 term (a warning says so
+        once), which is exact for every transition but collisions and detours.
         """
         a = self.goal_to_cell(achieved_goal)
         d = self.goal_to_cell(desired_goal)
-        if isinstance(info, dict):
-            collided = np.asarray(info["collided"], dtype=bool)
-            detour = np.asarray(info.get("detour_penalty", 0.0), dtype=np.float64)
+        shape = a.shape[:-1]
+        infos = [info] if isinstance(info, dict) else list(np.asarray(info, dtype=object).ravel())
+        if len(infos) not in (1, int(np.prod(shape, dtype=np.int64))):
+            raise invalid("info", f"{len(infos)} dicts", f"expected one per goal pair {shape}")
+        if all("collided" in i for i in infos):
+            collided = np.array([bool(i["collided"]) for i in infos])
+            detour = np.array([float(i.get("detour_penalty", 0.0)) for i in infos])
         else:
-            infos = list(np.asarray(info, dtype=object).ravel())
-            shape = a.shape[:-1]
-            collided = np.array([i["collided"] for i in infos], dtype=bool).reshape(shape)
-            detour = np.array(
-                [i.get("detour_penalty", 0.0) for i in infos], dtype=np.float64
-            ).reshape(shape)
+            if not self._warned_info:
+                self._warned_info = True
+                gym.logger.warn(
+                    "compute_reward got info dicts without 'collided': computing the reward "
+                    "as if no step collided. For the exact reward with SB3's HerReplayBuffer "
+                    'pass replay_buffer_kwargs={"copy_info_dict": True}.'
+                )
+            collided = np.zeros(len(infos), dtype=bool)
+            detour = np.zeros(len(infos))
+        if isinstance(info, dict) or len(infos) == 1:
+            collided, detour = collided[0], detour[0]
+        else:
+            collided, detour = collided.reshape(shape), detour.reshape(shape)
         r = self._rewards
         reached = np.all(a == d, axis=-1)
         reward = np.where(
