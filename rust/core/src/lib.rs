@@ -11,6 +11,7 @@
 //! - [`qlearning`] — tabular Q-learning (eqs. 6-8), learned path, Q-table files.
 //! - [`kinematics`] — D-H arm, forward kinematics, the arm's polyline, orientation grid.
 //! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
+//! - [`planner`] — pose planning over a terminal path (Algorithm 1).
 //! - [`env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type.
 //!
@@ -22,6 +23,7 @@ pub mod error;
 pub mod grid;
 pub mod ik;
 pub mod kinematics;
+pub mod planner;
 pub mod qlearning;
 pub mod scenario;
 
@@ -30,5 +32,6 @@ pub use error::{Error, Result};
 pub use grid::{Assist, GridWorld, Transition};
 pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
+pub use planner::{PosePlan, PosePlanner, PosePoint};
 pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
 pub use scenario::{Cell, Scenario};
