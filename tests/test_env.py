@@ -228,3 +228,37 @@ def test_scenario_keyword_forms(paper_simple, tmp_path):
         assert env.unwrapped.scenario == paper_simple
     env = gym.make("SixAxisAvoid-v0", scenario="paper_complex")
     assert env.unwrapped.scenario.name == "paper_complex"
+
+
+def test_arm_aware_blocks_cells_no_clear_pose_reaches(paper_simple):
+    if not hasattr(sa._core, "unreachable_cells"):
+        pytest.skip("no pose planner in this build")
+    unreachable = sa.unreachable_cells(paper_simple)
+    blocked = set(paper_simple.obstacles) | set(unreachable)
+    lo, hi = paper_simple.bounds
+    # A free neighbour of an unreachable cell, and the action from it into that cell.
+    u, n, action = next(
+        (u, n, act)
+        for u in unreachable
+        for d, act in ACTIONS.items()
+        for n in [tuple(int(v) for v in np.subtract(u, d))]
+        if all(lo[k] <= n[k] <= hi[k] for k in range(3))
+        and n not in blocked
+        and n != paper_simple.start
+    )
+    scenario = paper_simple.replace(target=n)
+    path = sa.shortest_path(scenario, extra_obstacles=unreachable)
+    env = gym.make("SixAxisAvoidArm-v0", scenario=paper_simple).unwrapped
+    plain = gym.make("SixAxisAvoid-v0", scenario=paper_simple).unwrapped
+    assert env.arm_aware and set(env.blocked_cells) == blocked
+    env.reset(seed=0)
+    plain.reset(seed=0)
+    for a, b in zip(path[:-1], path[1:]):
+        act = ACTIONS[tuple(np.subtract(b, a))]
+        assert not env.step(act)[4]["collided"]
+        plain.step(act)
+    assert env.cell == n
+    *_, info = env.step(action)
+    assert info["collided"] and env.cell == n  # no clear arm pose there: a collision
+    *_, info = plain.step(action)
+    assert not info["collided"] and plain.cell == u  # the terminal alone may go there

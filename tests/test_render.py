@@ -66,3 +66,14 @@ def test_render_without_mode_warns():
     env = gym.make("SixAxisAvoid-v0").unwrapped
     env.reset(seed=0)
     assert env.render() is None
+
+
+def test_render_arm_follows_the_terminal():
+    env = gym.make("SixAxisAvoid-v0", render_mode="rgb_array", render_arm=True)
+    env.reset(seed=0)
+    f0 = env.render()
+    env.step(5)  # to (0, -2, 3): a clear pose exists there
+    f1 = env.render()
+    arm = np.array(R.ARM, dtype=np.uint8)
+    assert np.all(f1 == arm, axis=-1).sum() > 100
+    assert not np.array_equal(np.all(f0 == arm, axis=-1), np.all(f1 == arm, axis=-1))

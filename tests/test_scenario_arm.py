@@ -101,3 +101,28 @@ def test_ik_by_rpy_and_errors():
         arm.ik([0.0, -200.0, 400.0], np.eye(3) * 2)
     with pytest.raises(sa.InvalidArgumentError, match="position_mm"):
         arm.ik([0.0, math.nan, 400.0], np.eye(3))
+
+
+def test_pose_planner(paper_simple):
+    planner = sa.PosePlanner(paper_simple)
+    clearance, q, _ = planner.best_clearance_at(paper_simple.target)
+    # SPEC section 2: the best clearance at the target (0,3,0) is about 0.87 cell.
+    assert 0.85 < clearance < 0.88
+    np.testing.assert_allclose(sa.Arm().fk(q)[0], [0.0, 300.0, 0.0], atol=1e-6)
+    assert planner.cell_reachable(paper_simple.target)
+    assert not planner.cell_reachable((0, 0, 20))
+    plan = planner.plan_poses(sa.shortest_path(paper_simple))
+    assert plan["complete"] and plan["blocked_cell"] is None
+    assert plan["joints_rad"].shape == (plan["cells"].shape[0], 6)
+    np.testing.assert_allclose(plan["joints_rad"][0], np.radians(paper_simple.beta0_deg))
+    with pytest.raises(sa.InvalidArgumentError, match="path"):
+        planner.plan_poses([(0, -2, 4), (0, 0, 4)])
+
+
+def test_unreachable_cells_and_clear_pose(paper_simple):
+    cells = sa.unreachable_cells(paper_simple)
+    assert cells and paper_simple.target not in cells and paper_simple.start not in cells
+    assert not sa.cells_reachable(cells, paper_simple).any()
+    assert sa.clear_pose_at(paper_simple, cells[0]) is None
+    q = sa.clear_pose_at(paper_simple, paper_simple.target)
+    np.testing.assert_allclose(sa.Arm().fk(q)[0], [0.0, 300.0, 0.0], atol=1e-6)

@@ -23,6 +23,7 @@ from sixaxis_avoid._core import (
     Arm,
     InternalError,
     InvalidArgumentError,
+    PosePlanner,
     QTableMismatchError,
     Scenario,
     ScenarioError,
@@ -32,10 +33,13 @@ from sixaxis_avoid._core import (
     SixAxisIOError,
     TrainResult,
     __version__,
+    cells_reachable,
+    clear_pose_at,
     greedy_path_of,
     load_q,
     shortest_path,
     train,
+    unreachable_cells,
 )
 
 ENV_ID = "SixAxisAvoid-v0"
@@ -75,6 +79,7 @@ __all__ = [
     "Arm",
     "InternalError",
     "InvalidArgumentError",
+    "PosePlanner",
     "QTableMismatchError",
     "Scenario",
     "ScenarioError",
@@ -84,9 +89,12 @@ __all__ = [
     "SixAxisIOError",
     "TrainResult",
     "__version__",
+    "cells_reachable",
+    "clear_pose_at",
     "greedy_path_of",
     "load_q",
     "make",
     "shortest_path",
     "train",
+    "unreachable_cells",
 ]

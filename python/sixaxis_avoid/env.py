@@ -53,6 +53,8 @@ class SixAxisAvoidEnv(gym.Env):
     (Table 1): start ``(0, -2, 4)``, target ``(0, 3, 0)``, 19 obstacles. With
     ``arm_aware=True`` (id ``SixAxisAvoidArm-v0``), a move into a cell that no clear pose of
     the whole arm reaches (the core's ``PosePlanner.cell_reachable``, eq. 11) also collides.
+    Those cells are computed in Rust once per scenario and cached; the start and target
+    cells are never among them.
     The grid world's dynamics and rewards run in Rust.
 
     ## Action Space

@@ -31,6 +31,10 @@
 //! - **Extra obstacles** (the arm-aware variant): cells that count as blocked on top of the
 //!   scenario's obstacles, e.g. cells no clear arm pose reaches. The start and the target
 //!   must not be among them.
+//! - **Arm-aware cells** ([`unreachable_cells`]): the free cells (start and target
+//!   excluded) at which no pose of the whole arm is clear ([`PosePlanner::cell_reachable`]);
+//!   passed as extra obstacles, a move into one counts as a collision.
+//!   [`first_clear_pose`] gives a pose to draw at a cell.
 //! - **Next-step autoreset** ([`BatchEnv`]): the step after an episode ends resets that env
 //!   instead of moving it; that step's action is ignored, its reward is 0 and it neither
 //!   terminates nor truncates.
@@ -42,6 +46,8 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::error::{Error, Result};
 use crate::grid::{Assist, GridWorld, NUM_ACTIONS};
+use crate::kinematics::{Joints, TerminalPose};
+use crate::planner::PosePlanner;
 use crate::scenario::{Cell, Scenario};
 
 /// Length of the vector observation.
@@ -169,6 +175,37 @@ impl EnvModel {
         let r = &self.rows[state];
         [r[0], r[1], r[2]]
     }
+}
+
+/// The free cells of a scenario's grid, start and target excluded, at which no clear pose of
+/// the whole arm exists (`!PosePlanner::cell_reachable`), in state order.
+pub fn unreachable_cells(scenario: &Scenario) -> Result<Vec<Cell>> {
+    let world = GridWorld::new(scenario)?;
+    let planner = PosePlanner::from_scenario(scenario);
+    let (start, target) = (world.start(), world.target());
+    Ok((0..world.num_states())
+        .filter(|&s| s != start && s != target && !world.is_blocked(s))
+        .map(|s| world.cell_of(s))
+        .filter(|&c| !planner.cell_reachable(c))
+        .collect())
+}
+
+/// The first clear pose (radians) whose terminal is at the centre of `cell`: orientations
+/// in the planner's grid order, IK solutions in IK order, within joint limits. `None` if
+/// there is none.
+pub fn first_clear_pose(planner: &PosePlanner, cell_mm: f64, cell: Cell) -> Option<Joints> {
+    let position_mm =
+        nalgebra::Vector3::new(cell[0] as f64, cell[1] as f64, cell[2] as f64) * cell_mm;
+    let arm = planner.arm();
+    planner.orientations().iter().find_map(|o| {
+        arm.ik(&TerminalPose {
+            position_mm,
+            rotation: o.rotation,
+        })
+        .iter()
+        .find(|q| planner.within_limits(q) && planner.clearance().pose_is_clear(&arm.points_mm(q)))
+        .copied()
+    })
 }
 
 /// One step's outcome.
@@ -591,6 +628,33 @@ mod tests {
         }
         assert!(last.unwrap().reached);
         assert_eq!(ep.distance_to_target(&m), 0.0);
+    }
+
+    #[test]
+    fn arm_aware_cells() {
+        let s = Scenario::builtin("paper_simple").unwrap();
+        let cells = unreachable_cells(&s).unwrap();
+        assert!(!cells.contains(&s.start) && !cells.contains(&s.target));
+        assert!(!cells.iter().any(|c| s.obstacles.contains(c)));
+        let planner = PosePlanner::from_scenario(&s);
+        for c in &cells {
+            assert!(first_clear_pose(&planner, s.cell_mm, *c).is_none());
+        }
+        let q = first_clear_pose(&planner, s.cell_mm, s.target).expect("the target is reachable");
+        let p = planner.arm().fk(&q).position_mm;
+        assert!((p - s.cell_centre_mm(s.target)).norm() < 1e-6);
+        // The arm-aware model blocks those cells.
+        let m = EnvModel::new(
+            &s,
+            EnvOptions {
+                extra_obstacles: cells.clone(),
+                ..EnvOptions::default()
+            },
+        )
+        .unwrap();
+        for c in &cells {
+            assert!(m.world().is_blocked(m.world().state_of(*c).unwrap()));
+        }
     }
 
     #[test]
