@@ -387,6 +387,12 @@ fn capsule_links(points: &ArmPoints) -> impl Iterator<Item = (&Vector3<f64>, &Ve
         .filter(move |(a, b)| a != b || (all_zero && std::ptr::eq(*a, &points[0])))
 }
 
+/// Whether every coordinate of the polyline is finite (a NaN pose is never clear).
+#[inline]
+fn all_finite(points: &ArmPoints) -> bool {
+    points.iter().all(|p| p.iter().all(|x| x.is_finite()))
+}
+
 /// Whether the 4-wide AVX kernel can run here.
 fn cpu_has_avx() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -472,6 +478,9 @@ impl Clearance {
     /// far is `<= stop`. Zero-length segments are skipped (see `Seg::pick`).
     #[inline]
     fn min_d2(&self, points: &ArmPoints, stop: f64) -> f64 {
+        if !all_finite(points) {
+            return f64::NAN;
+        }
         let scale = 1.0 / self.cell_mm;
         #[cfg(target_arch = "x86_64")]
         if self.avx {
@@ -508,6 +517,9 @@ impl Clearance {
     /// Capsules model: smallest gap between the 7 link capsules and the obstacle cubes, mm
     /// (0 on contact or overlap); `INFINITY` without obstacles.
     pub fn capsules_gap_mm(&self, points: &ArmPoints, link_radius_mm: f64) -> f64 {
+        if !all_finite(points) {
+            return f64::NAN;
+        }
         let half = 0.5 * self.cell_mm;
         let half_diag = half * 3f64.sqrt();
         let r = link_radius_mm;
@@ -533,7 +545,7 @@ impl Clearance {
     ///
     /// Centres model: smallest distance from any obstacle centre to any of the 7 polyline
     /// segments (eq. 11). Capsules model: smallest gap between link capsules and obstacle
-    /// cubes (0 on contact). `INFINITY` without obstacles.
+    /// cubes (0 on contact). `INFINITY` without obstacles, NaN if a point is not finite.
     pub fn clearance_cells(&self, points: &ArmPoints) -> f64 {
         match self.model {
             ClearanceModel::Centres => self.centres_clearance_cells(points),
@@ -543,7 +555,8 @@ impl Clearance {
         }
     }
 
-    /// Whether one pose is clear; stops at the first violation.
+    /// Whether one pose is clear; stops at the first violation. A pose with a non-finite
+    /// point is never clear.
     ///
     /// Centres model: clearance > `arm_safe_distance` (strict). Capsules model:
     /// `gap * cell_mm > margin_mm` (strict).
@@ -558,6 +571,9 @@ impl Clearance {
                 link_radius_mm,
                 margin_mm,
             } => {
+                if !all_finite(points) {
+                    return false;
+                }
                 let half = 0.5 * self.cell_mm;
                 let half_diag = half * 3f64.sqrt();
                 let r = link_radius_mm;

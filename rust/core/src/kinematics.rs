@@ -190,8 +190,8 @@ impl Arm {
     #[inline]
     pub fn fk(&self, q: &Joints) -> TerminalPose {
         let mut f = Frame::identity();
-        for i in 0..6 {
-            f = f.then_link(&self.links[i], q[i]);
+        for (link, &theta) in self.links.iter().zip(q) {
+            f = f.then_link(link, theta);
         }
         TerminalPose {
             position_mm: f.p,

@@ -357,3 +357,27 @@ fn capsules_on_the_paper_scene_agree_with_naive_search_and_bounds() {
         assert_eq!(c.pose_is_clear(&p), gap * 100.0 > 10.0, "pose {k}");
     }
 }
+
+#[test]
+fn non_finite_poses_are_never_clear() {
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let arm = s.arm();
+    let mut p = arm.points_mm(&beta0());
+    p[5].y = f64::NAN;
+    for model in [
+        ClearanceModel::Centres,
+        ClearanceModel::Capsules {
+            link_radius_mm: 10.0,
+            margin_mm: 0.0,
+        },
+    ] {
+        let c = Clearance::new(&s.obstacles, s.cell_mm, model, s.arm_safe_distance);
+        assert!(c.clearance_cells(&p).is_nan());
+        assert!(!c.pose_is_clear(&p));
+        let mut q = p;
+        q[7].z = f64::INFINITY;
+        assert!(!c.pose_is_clear(&q));
+        let bad = [f64::NAN; 6];
+        assert!(!c.motion_is_clear(&arm, &beta0(), &bad, 10));
+    }
+}
