@@ -15,6 +15,7 @@
 //! - [`planner`] — pose planning over a terminal path (Algorithm 1).
 //! - [`replanning`] — the integrated loop with re-planning (Algorithm 2).
 //! - [`generator`] — random cluttered scenarios for benchmarks.
+//! - [`env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type; [`io`] — atomic file output.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
@@ -28,6 +29,7 @@
 //! ```
 
 pub mod clearance;
+pub mod env;
 pub mod error;
 pub mod generator;
 pub mod grid;

@@ -1,9 +1,66 @@
 //! `sixaxis_avoid._core`: thin PyO3 bindings over `sixaxis-core`.
+//!
+//! Everything of substance lives in the core (`sixaxis_core::env` holds the episode and
+//! batched-env logic); this crate converts arguments, maps errors (`errors`) and releases
+//! the GIL around long calls (`errors::run`).
+
 use pyo3::prelude::*;
+
+mod arm;
+mod convert;
+mod env_core;
+mod errors;
+mod planner;
+mod scenario;
+mod train;
+
+/// Raise the Python exception of one core error variant (for the tests of the mapping).
+/// `kind` is the variant's name: `InvalidScenario`, `ScenarioParse`, `ScenarioNotFound`,
+/// `InvalidArgument`, `QTableMismatch`, `Io`, or `Panic` for a caught Rust panic.
+#[pyfunction]
+fn _raise_core_error(py: Python<'_>, kind: &str) -> PyResult<()> {
+    use sixaxis_core::Error;
+    let kind = kind.to_string();
+    errors::run(py, move || {
+        Err(match kind.as_str() {
+            "InvalidScenario" => Error::invalid("bounds", "x", "test"),
+            "ScenarioParse" => Error::ScenarioParse("test".into()),
+            "ScenarioNotFound" => Error::ScenarioNotFound {
+                name: "nope".into(),
+                known: "paper_simple".into(),
+            },
+            "InvalidArgument" => Error::argument("seed", -1, "test"),
+            "QTableMismatch" => Error::QTableMismatch("test".into()),
+            "Io" => Error::io(
+                "/nonexistent/file.json",
+                std::io::Error::from_raw_os_error(2),
+            ),
+            "Panic" => panic!("test panic"),
+            other => Error::argument("kind", other, "unknown error kind"),
+        })
+    })
+}
 
 /// The extension module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::register(m)?;
+    m.add_class::<scenario::PyScenario>()?;
+    m.add_class::<arm::PyArm>()?;
+    m.add_class::<train::PyTrainResult>()?;
+    m.add_class::<env_core::PyEnvCore>()?;
+    m.add_class::<env_core::PyVecEnvCore>()?;
+    m.add_function(wrap_pyfunction!(train::train, m)?)?;
+    m.add_function(wrap_pyfunction!(train::load_q, m)?)?;
+    m.add_function(wrap_pyfunction!(train::greedy_path_of, m)?)?;
+    m.add_function(wrap_pyfunction!(train::shortest_path, m)?)?;
+    m.add_class::<planner::PyPosePlanner>()?;
+    m.add_function(wrap_pyfunction!(planner::unreachable_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(planner::clear_pose_at, m)?)?;
+    m.add_function(wrap_pyfunction!(planner::cells_reachable, m)?)?;
+    m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
+    m.add("DEFAULT_SCENARIO", scenario::DEFAULT_SCENARIO)?;
+    m.add_function(wrap_pyfunction!(_raise_core_error, m)?)?;
     Ok(())
 }

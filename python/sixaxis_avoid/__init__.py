@@ -1,0 +1,100 @@
+"""SixAxisAvoid: a six-axis arm that learns to reach a target through clutter.
+
+Importing the package registers the Gymnasium ids ``SixAxisAvoid-v0`` and
+``SixAxisAvoidArm-v0`` (arm-aware), each with a native Rust-batched vector env::
+
+    import gymnasium as gym
+    import sixaxis_avoid
+
+    env = gym.make("SixAxisAvoid-v0")
+    envs = gym.make_vec("SixAxisAvoid-v0", num_envs=1024)
+
+The core (grid world, Q-learning, kinematics) is Rust, in the extension ``sixaxis_avoid._core``.
+Every error is a :class:`SixAxisError`, itself a ``ValueError``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+
+from sixaxis_avoid._core import (
+    Arm,
+    InternalError,
+    InvalidArgumentError,
+    PosePlanner,
+    QTableMismatchError,
+    Scenario,
+    ScenarioError,
+    ScenarioNotFoundError,
+    ScenarioParseError,
+    SixAxisError,
+    SixAxisIOError,
+    TrainResult,
+    __version__,
+    cells_reachable,
+    clear_pose_at,
+    greedy_path_of,
+    load_q,
+    shortest_path,
+    train,
+    unreachable_cells,
+)
+
+ENV_ID = "SixAxisAvoid-v0"
+ARM_ENV_ID = "SixAxisAvoidArm-v0"
+#: Step cap of the registrations: the default scenario's ``learning.max_steps_per_episode``.
+MAX_EPISODE_STEPS = Scenario().max_steps_per_episode
+
+
+def _register() -> None:
+    for env_id, kwargs in ((ENV_ID, {}), (ARM_ENV_ID, {"arm_aware": True})):
+        if env_id in gym.registry:
+            continue
+        gym.register(
+            id=env_id,
+            entry_point="sixaxis_avoid.env:SixAxisAvoidEnv",
+            vector_entry_point="sixaxis_avoid.vector:SixAxisAvoidVectorEnv",
+            max_episode_steps=MAX_EPISODE_STEPS,
+            kwargs=kwargs,
+        )
+
+
+_register()
+
+
+def make(env_id: str = ENV_ID, scenario: Any = None, **kwargs: Any) -> gym.Env:
+    """``gym.make`` with ``max_episode_steps`` taken from the scenario's
+    ``learning.max_steps_per_episode`` (unless given)."""
+    s = scenario if isinstance(scenario, Scenario) else Scenario(scenario)
+    kwargs.setdefault("max_episode_steps", s.max_steps_per_episode)
+    return gym.make(env_id, scenario=s, **kwargs)
+
+
+__all__ = [
+    "ARM_ENV_ID",
+    "ENV_ID",
+    "MAX_EPISODE_STEPS",
+    "Arm",
+    "InternalError",
+    "InvalidArgumentError",
+    "PosePlanner",
+    "QTableMismatchError",
+    "Scenario",
+    "ScenarioError",
+    "ScenarioNotFoundError",
+    "ScenarioParseError",
+    "SixAxisError",
+    "SixAxisIOError",
+    "TrainResult",
+    "__version__",
+    "cells_reachable",
+    "clear_pose_at",
+    "greedy_path_of",
+    "load_q",
+    "make",
+    "shortest_path",
+    "train",
+    "unreachable_cells",
+]

@@ -1,0 +1,401 @@
+"""The Gymnasium environment ``SixAxisAvoid-v0`` (and ``SixAxisAvoidArm-v0``)."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from sixaxis_avoid import _arm, _core
+from sixaxis_avoid._checks import (
+    OBS_TYPES,
+    check_bool,
+    check_choice,
+    check_nonneg_float,
+    check_optional_bool,
+    invalid,
+)
+
+VECTOR_OBS_DIM = _core.VECTOR_OBS_DIM
+
+
+def as_scenario(scenario: Any) -> _core.Scenario:
+    """A Scenario from a Scenario, built-in name, JSON path, dict, or None (the default)."""
+    return scenario if isinstance(scenario, _core.Scenario) else _core.Scenario(scenario)
+
+
+def vector_observation_space() -> spaces.Box:
+    low = np.array([-1.0] * 6 + [0.0] * 7, dtype=np.float32)
+    high = np.ones(VECTOR_OBS_DIM, dtype=np.float32)
+    return spaces.Box(low, high, dtype=np.float32)
+
+
+def goal_observation_space() -> spaces.Dict:
+    goal = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
+    return spaces.Dict(
+        {"observation": vector_observation_space(), "achieved_goal": goal, "desired_goal": goal}
+    )
+
+
+class SixAxisAvoidEnv(gym.Env):
+    """The terminal (end effector) of a six-axis arm moves on a 3D grid of 100 mm cells and
+    must reach a target through clutter, after *Path Planning with Autonomous Obstacle
+    Avoidance Using Reinforcement Learning for Six-axis Arms* (section III.B).
+
+    ## Description
+
+    The grid is the scenario's box of cells; obstacles are unit cubes centred on cells. Each
+    step moves the terminal one cell along an axis. A move that leaves the box or comes
+    within ``terminal_safe_distance`` of an obstacle centre collides and the terminal stays
+    where it was (the paper: "moves back"). The default scenario is the paper's simple case
+    (Table 1): start ``(0, -2, 4)``, target ``(0, 3, 0)``, 19 obstacles. With
+    ``arm_aware=True`` (id ``SixAxisAvoidArm-v0``), a move into a cell that no clear pose of
+    the whole arm reaches (the core's ``PosePlanner.cell_reachable``, eq. 11) also collides.
+    Those cells are computed in Rust once per scenario and cached; the start and target
+    cells are never among them.
+    The grid world's dynamics and rewards run in Rust.
+
+    ## Action Space
+
+    ``Discrete(6)``: ``0: +x, 1: -x, 2: +y, 3: -y, 4: +z, 5: -z`` (eq. 3).
+
+    ## Observation Space
+
+    By keyword ``obs_type``:
+
+    - ``"vector"`` (default): ``Box(13,)`` float32 — the terminal's cell normalised to the
+      bounds (``2 (c - min) / (max - min) - 1`` per axis, in [-1, 1]); the target's cell
+      normalised the same way; six flags, 1 if the move of that action would collide; 1 if
+      the last step collided.
+    - ``"index"``: ``Discrete(num_states)`` — the number of the terminal's cell (row-major
+      over x, y, z with z fastest; ``env.unwrapped.cell_of(i)`` converts).
+    - ``"goal"``: ``Dict(observation=Box(13,), achieved_goal=Box(3,), desired_goal=Box(3,))``
+      with the normalised terminal and target cells as goals, and a vectorised
+      :meth:`compute_reward` for hindsight experience replay (SB3's ``HerReplayBuffer``).
+
+    ## Rewards
+
+    The paper's reward, computed in Rust, times ``reward_scale``:
+
+    - eq. 5: ``+target_reward`` (20000) on reaching the target, ``-collision_penalty``
+      (8000) on a collision, ``-step_penalty`` (15000) otherwise;
+    - eq. 9 (``assist``): after a colliding step with action *a*, an extra
+      ``-repeat_collision_penalty`` (230000) if the next step collides again, else
+      ``-reverse_after_collision_penalty`` (10000) if it takes the opposite of *a*;
+    - eq. 10 (``assist``): ``+distance_reward * (d_o - d_t)`` (40 per cell) on every step,
+      ``d_o = |target - start|``, ``d_t = |target - terminal|`` (cells).
+
+    The magnitudes are the paper's (tens of thousands): for neural-network agents pass e.g.
+    ``reward_scale=1e-4``.
+
+    ## Starting State
+
+    The terminal starts at the scenario's start cell. The target is the scenario's, or with
+    ``random_target=True`` drawn uniformly at each reset from the free cells other than the
+    start (seeded through ``np_random``).
+
+    ## Episode End
+
+    - Termination: the terminal reaches the target.
+    - Truncation: after ``max_episode_steps`` steps, by Gymnasium's ``TimeLimit`` (the
+      registration uses 1000, the shipped scenarios' ``learning.max_steps_per_episode``; for
+      another cap pass ``max_episode_steps=`` to ``gym.make`` or use
+      :func:`sixaxis_avoid.make`, which takes it from the scenario).
+
+    ``info`` holds ``collided`` (bool), ``distance_to_target`` (cells), ``cell`` (the
+    terminal's cell, a tuple), ``is_success`` (reached the target on this step) and
+    ``detour_penalty`` (eq. 9's part of the reward before scaling, used by
+    :meth:`compute_reward`).
+
+    ## Arguments
+
+    ```python
+    import gymnasium as gym
+    import sixaxis_avoid  # registers the ids
+
+    env = gym.make(
+        "SixAxisAvoid-v0",
+        scenario="paper_simple",  # built-in name, JSON path, dict, Scenario, or None
+        obs_type="vector",  # "vector" | "index" | "goal"
+        assist=True,  # eqs. 9 and 10 on (False: eq. 5 alone; None: the scenario's flags)
+        reward_scale=1.0,  # finite, >= 0
+        random_target=False,  # draw the target per episode (needs "vector" or "goal")
+        arm_aware=False,  # cells no clear arm pose reaches count as collisions
+        render_mode=None,  # None | "rgb_array" | "human"
+        render_arm=False,  # draw the arm in a clear IK pose at the terminal's cell
+    )
+    ```
+
+    Every bad value raises ``InvalidArgumentError`` / ``ScenarioError`` (``ValueError``
+    subclasses) naming the keyword or field and the value.
+
+    ## Version History
+
+    - v0: initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 8}
+
+    def __new__(cls, *args: Any, **kwargs: Any):
+        # ``obs_type="goal"`` gives the subclass that has ``compute_reward``: SB3 takes any
+        # env with that method for a goal-conditioned one.
+        if cls is SixAxisAvoidEnv and kwargs.get("obs_type") == "goal":
+            cls = SixAxisAvoidGoalEnv
+        return super().__new__(cls)
+
+    def __init__(
+        self,
+        scenario: Any = None,
+        obs_type: str = "vector",
+        assist: bool | None = True,
+        reward_scale: float = 1.0,
+        random_target: bool = False,
+        arm_aware: bool = False,
+        render_mode: str | None = None,
+        render_arm: bool = False,
+        render_size: int = 512,
+    ):
+        check_choice("obs_type", obs_type, OBS_TYPES)
+        assist = check_optional_bool("assist", assist)
+        reward_scale = check_nonneg_float("reward_scale", reward_scale)
+        random_target = check_bool("random_target", random_target)
+        arm_aware = check_bool("arm_aware", arm_aware)
+        render_arm = check_bool("render_arm", render_arm)
+        check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
+        if (
+            isinstance(render_size, bool)
+            or not isinstance(render_size, int)
+            or not 64 <= render_size <= 4096
+        ):
+            raise invalid("render_size", render_size, "must be an integer in 64..=4096")
+        if random_target and obs_type == "index":
+            raise invalid(
+                "random_target",
+                random_target,
+                'needs obs_type "vector" or "goal" '
+                '(the "index" observation does not show the target)',
+            )
+
+        self.scenario: _core.Scenario = as_scenario(scenario)
+        self.obs_type = obs_type
+        self.reward_scale = reward_scale
+        self.random_target = random_target
+        self.arm_aware = arm_aware
+        self.render_mode = render_mode
+        self.render_arm = render_arm
+        self._render_size = render_size
+
+        extra = _arm.unreachable_cells(self.scenario) if arm_aware else None
+        self._core = _core.EnvCore(
+            self.scenario,
+            obs="index" if obs_type == "index" else "vector",
+            assist=assist,
+            reward_scale=reward_scale,
+            random_target=random_target,
+            extra_obstacles=extra,
+            track_path=render_mode is not None,
+        )
+        self._goal = obs_type == "goal"
+        self._seeded = False
+
+        self.action_space = spaces.Discrete(6)
+        if obs_type == "vector":
+            self.observation_space = vector_observation_space()
+        elif obs_type == "index":
+            self.observation_space = spaces.Discrete(self._core.num_states)
+        else:
+            self.observation_space = goal_observation_space()
+
+        lo, hi = self.scenario.bounds
+        self._lo = np.asarray(lo, dtype=np.float64)
+        self._span = np.maximum(np.asarray(hi, dtype=np.float64) - self._lo, 1.0)
+        self._start = np.asarray(self.scenario.start, dtype=np.int64)
+        self._rewards = self.scenario.rewards
+        self._assist = self._core.assist
+        self._renderer = None
+        self._window = None
+        self._warned_info = False
+
+    # Gymnasium API ----------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        if seed is not None or not self._seeded:
+            # The Rust generator of random targets is seeded from np_random.
+            self._core.seed(int(self.np_random.integers(0, 2**63)))
+            self._seeded = True
+        obs, info = self._core.reset()
+        if self._goal:
+            obs = self._goal_obs(obs)
+        if self.render_mode == "human":
+            self._render_human()
+        return obs, info
+
+    def step(self, action):
+        obs, reward, terminated, info = self._core.step(action)
+        if self._goal:
+            obs = self._goal_obs(obs)
+        if self.render_mode == "human":
+            self._render_human()
+        return obs, reward, terminated, False, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn(
+                "Calling render() without a render_mode; "
+                "pass render_mode='rgb_array' or 'human' to gym.make."
+            )
+            return None
+        if self.render_mode == "rgb_array":
+            return self._frame()
+        self._render_human()
+        return None
+
+    def close(self):
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+    # Goal-conditioned API ---------------------------------------------------------------
+    @staticmethod
+    def _goal_obs(obs: np.ndarray) -> dict[str, np.ndarray]:
+        return {
+            "observation": obs,
+            "achieved_goal": obs[0:3].copy(),
+            "desired_goal": obs[3:6].copy(),
+        }
+
+    def goal_to_cell(self, goal: np.ndarray) -> np.ndarray:
+        """Normalised goal(s) ``(..., 3)`` -> integer cells ``(..., 3)``."""
+        g = np.asarray(goal, dtype=np.float64)
+        return np.rint((g + 1.0) * 0.5 * self._span + self._lo).astype(np.int64)
+
+    # Introspection ----------------------------------------------------------------------
+    @property
+    def num_states(self) -> int:
+        return self._core.num_states
+
+    @property
+    def cell(self) -> tuple[int, int, int]:
+        """The terminal's cell."""
+        return self._core.cell
+
+    @property
+    def target_cell(self) -> tuple[int, int, int]:
+        """This episode's target cell."""
+        return self._core.target_cell
+
+    def cell_of(self, state: int) -> tuple[int, int, int]:
+        """The cell of an ``"index"`` observation."""
+        return self._core.cell_of(int(state))
+
+    def state_of(self, cell) -> int | None:
+        """The ``"index"`` observation of a cell (None outside bounds)."""
+        return self._core.state_of(cell)
+
+    @property
+    def blocked_cells(self) -> list[tuple[int, int, int]]:
+        """Obstacles, then (arm-aware) the cells no clear arm pose reaches."""
+        return self._core.obstacles
+
+    @property
+    def path(self) -> list[tuple[int, int, int]]:
+        """Cells visited in this episode (tracked when a render_mode is set)."""
+        return self._core.path
+
+    # Rendering --------------------------------------------------------------------------
+    def _frame(self) -> np.ndarray:
+        from sixaxis_avoid.render import IsoRenderer
+
+        if self._renderer is None:
+            self._renderer = IsoRenderer(
+                self.scenario.bounds,
+                self.scenario.obstacles,
+                self._core.extra_obstacles,
+                size=self._render_size,
+                include_origin=self.render_arm,
+            )
+        arm = None
+        if self.render_arm:
+            cell = self._core.cell
+            q = _arm.clear_pose(self.scenario, cell)
+            if q is not None:
+                arm = _core.Arm.from_scenario(self.scenario).points_mm(q) / self.scenario.cell_mm
+        return self._renderer.frame(self._core.path, self._core.cell, self._core.target_cell, arm)
+
+    def _render_human(self) -> None:
+        from sixaxis_avoid.render import HumanWindow
+
+        if self._window is None:
+            self._window = HumanWindow(
+                f"SixAxisAvoid: {self.scenario.name}", self.metadata["render_fps"]
+            )
+        caption = (
+            f"step {self._core.steps}  cell {self._core.cell}  target {self._core.target_cell}"
+        )
+        self._window.show(self._frame(), caption)
+
+
+class SixAxisAvoidGoalEnv(SixAxisAvoidEnv):
+    """:class:`SixAxisAvoidEnv` with ``obs_type="goal"``: Dict observations and a vectorised
+    :meth:`compute_reward` (``gym.make("SixAxisAvoid-v0", obs_type="goal")`` makes one)."""
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        kwargs.setdefault("obs_type", "goal")
+        super().__init__(*args, **kwargs)
+        if self.obs_type != "goal":
+            raise invalid("obs_type", self.obs_type, 'SixAxisAvoidGoalEnv needs obs_type "goal"')
+
+    def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray | float:
+        """The step reward for (achieved, desired) goal pairs, vectorised over leading axes.
+
+        Equals the reward ``step`` returned when ``achieved_goal`` is the goal reached by
+        that step; with another ``desired_goal`` it is the reward the same move would have
+        earned for that target (HER relabelling). ``info`` is the step's info dict or a
+        sequence of them (its ``collided`` and ``detour_penalty`` are used).
+
+        SB3's ``HerReplayBuffer`` passes empty info dicts unless made with
+        ``replay_buffer_kwargs={"copy_info_dict": True}``; without them the reward is
+        computed as if the step had not collided and had no eq. 9 term (a warning says so
+        once), which is exact for every transition but collisions and detours.
+        """
+        a = self.goal_to_cell(achieved_goal)
+        d = self.goal_to_cell(desired_goal)
+        shape = a.shape[:-1]
+        infos = [info] if isinstance(info, dict) else list(np.asarray(info, dtype=object).ravel())
+        if len(infos) not in (1, int(np.prod(shape, dtype=np.int64))):
+            raise invalid("info", f"{len(infos)} dicts", f"expected one per goal pair {shape}")
+        if all("collided" in i for i in infos):
+            collided = np.array([bool(i["collided"]) for i in infos])
+            detour = np.array([float(i.get("detour_penalty", 0.0)) for i in infos])
+        else:
+            if not self._warned_info:
+                self._warned_info = True
+                gym.logger.warn(
+                    "compute_reward got info dicts without 'collided': computing the reward "
+                    "as if no step collided. For the exact reward with SB3's HerReplayBuffer "
+                    'pass replay_buffer_kwargs={"copy_info_dict": True}.'
+                )
+            collided = np.zeros(len(infos), dtype=bool)
+            detour = np.zeros(len(infos))
+        if isinstance(info, dict) or len(infos) == 1:
+            collided, detour = collided[0], detour[0]
+        else:
+            collided, detour = collided.reshape(shape), detour.reshape(shape)
+        r = self._rewards
+        reached = np.all(a == d, axis=-1)
+        reward = np.where(
+            collided,
+            -r["collision_penalty"],
+            np.where(reached, r["target_reward"], -r["step_penalty"]),
+        ).astype(np.float64)
+        detour_on, distance_on = self._assist
+        if distance_on:
+            d_t = np.sqrt(np.sum((d - a) ** 2, axis=-1).astype(np.float64))
+            d_o = np.sqrt(np.sum((d - self._start) ** 2, axis=-1).astype(np.float64))
+            reward = reward + r["distance_reward"] * (d_o - d_t)
+        if detour_on:
+            reward = reward + detour
+        reward = reward * self.reward_scale
+        return reward if reward.ndim else float(reward)

@@ -1,0 +1,216 @@
+"""The native vector env: N copies of ``SixAxisAvoid-v0`` stepped in one Rust call."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from sixaxis_avoid import _arm, _core
+from sixaxis_avoid._checks import (
+    OBS_TYPES,
+    check_bool,
+    check_choice,
+    check_nonneg_float,
+    check_optional_bool,
+    check_positive_int,
+    invalid,
+)
+from sixaxis_avoid.env import as_scenario, goal_observation_space, vector_observation_space
+
+
+class SixAxisAvoidVectorEnv(VectorEnv):
+    """``num_envs`` copies of :class:`~sixaxis_avoid.env.SixAxisAvoidEnv` in one Rust object.
+
+    Made by ``gym.make_vec("SixAxisAvoid-v0", num_envs=N,
+    vectorization_mode="vector_entry_point")`` (the default mode for our ids). Each
+    :meth:`step` is one Rust call that moves all N envs with the GIL released and writes
+    into NumPy arrays allocated once; with ``copy=True`` (default, as Gymnasium's
+    ``SyncVectorEnv``) the returned arrays are copies of them, with ``copy=False`` they are
+    the reused buffers themselves (overwritten by the next call).
+
+    Same keywords and trajectories as N single envs made with ``gym.make`` (the single env's
+    ``TimeLimit`` is done here in Rust, at ``max_episode_steps``), with Gymnasium 1.x
+    next-step autoreset: the step after an episode ends resets that env, ignores its action,
+    and returns reward 0, not terminated, not truncated. ``reset(seed=s)`` seeds env ``i``
+    with ``s + i``, as ``SyncVectorEnv`` does. ``reset(options={"reset_mask": mask})`` resets
+    only the envs where ``mask`` is true.
+
+    ``info`` holds arrays ``collided``, ``distance_to_target``, ``cell`` (``(N, 3)`` int32)
+    and ``is_success``, each with its ``_key`` mask (all true). Observation types
+    ``"vector"``, ``"index"`` and ``"goal"``; no rendering.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+        "render_modes": [],
+    }
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        scenario: Any = None,
+        obs_type: str = "vector",
+        assist: bool | None = True,
+        reward_scale: float = 1.0,
+        random_target: bool = False,
+        arm_aware: bool = False,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        render_arm: bool = False,
+        render_size: int = 512,
+        copy: bool = True,
+    ):
+        num_envs = check_positive_int("num_envs", num_envs)
+        check_choice("obs_type", obs_type, OBS_TYPES)
+        assist = check_optional_bool("assist", assist)
+        reward_scale = check_nonneg_float("reward_scale", reward_scale)
+        random_target = check_bool("random_target", random_target)
+        arm_aware = check_bool("arm_aware", arm_aware)
+        check_bool("render_arm", render_arm)
+        self.copy = check_bool("copy", copy)
+        if render_mode is not None:
+            raise invalid(
+                "render_mode",
+                render_mode,
+                'the native vector env does not render; use vectorization_mode="sync" to render',
+            )
+        if random_target and obs_type == "index":
+            raise invalid(
+                "random_target",
+                random_target,
+                'needs obs_type "vector" or "goal" '
+                '(the "index" observation does not show the target)',
+            )
+        self.scenario = as_scenario(scenario)
+        if max_episode_steps is None:
+            max_episode_steps = self.scenario.max_steps_per_episode
+        max_episode_steps = check_positive_int("max_episode_steps", max_episode_steps)
+
+        self.num_envs = num_envs
+        self.obs_type = obs_type
+        self.render_mode = None
+        self.max_episode_steps = max_episode_steps
+        extra = _arm.unreachable_cells(self.scenario) if arm_aware else None
+        self._core = _core.VecEnvCore(
+            self.scenario,
+            num_envs=num_envs,
+            max_episode_steps=max_episode_steps,
+            obs="index" if obs_type == "index" else "vector",
+            assist=assist,
+            reward_scale=reward_scale,
+            random_target=random_target,
+            extra_obstacles=extra,
+        )
+        if obs_type == "vector":
+            self.single_observation_space = vector_observation_space()
+        elif obs_type == "index":
+            self.single_observation_space = spaces.Discrete(self._core.num_states)
+        else:
+            self.single_observation_space = goal_observation_space()
+        self.single_action_space = spaces.Discrete(6)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+
+        self._obs = self._core.observations
+        self._rewards = self._core.rewards
+        self._terminated = self._core.terminated
+        self._truncated = self._core.truncated
+        self._collided = self._core.collided
+        self._distance = self._core.distance_to_target
+        self._cells = self._core.cells
+        self._mask = np.ones(num_envs, dtype=bool)
+        self._seeded = False
+
+    def _seed(self, seed: int | list[int | None] | None) -> None:
+        n = self.num_envs
+        if seed is None:
+            if self._seeded:
+                return
+            seeds: list[int | None] = [None] * n
+        elif isinstance(seed, (int, np.integer)):
+            seeds = [int(seed) + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise invalid("seed", seed, f"a list of seeds must have one per env ({n})")
+        # Env i's generator is seeded exactly as a single env's reset(seed=seeds[i]) does.
+        self._core.seed([int(seeding.np_random(s)[0].integers(0, 2**63)) for s in seeds])
+        self._seeded = True
+
+    def _result(self, arr: np.ndarray) -> np.ndarray:
+        return arr.copy() if self.copy else arr
+
+    def _observations(self):
+        obs = self._result(self._obs)
+        if self.obs_type == "goal":
+            return {
+                "observation": obs,
+                "achieved_goal": obs[:, 0:3],
+                "desired_goal": obs[:, 3:6],
+            }
+        return obs
+
+    def _info(self) -> dict[str, Any]:
+        m = self._mask
+        return {
+            "collided": self._result(self._collided),
+            "_collided": m,
+            "distance_to_target": self._result(self._distance),
+            "_distance_to_target": m,
+            "cell": self._result(self._cells),
+            "_cell": m,
+            "is_success": self._terminated.copy(),
+            "_is_success": m,
+        }
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ):
+        super().reset(seed=seed if isinstance(seed, (int, np.integer)) else None)
+        self._seed(seed)
+        mask = None
+        if options and "reset_mask" in options:
+            mask = np.asarray(options["reset_mask"])
+            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
+                raise invalid(
+                    "options['reset_mask']",
+                    options["reset_mask"],
+                    f"must be a bool array of shape ({self.num_envs},)",
+                )
+        self._core.reset(mask)
+        return self._observations(), self._info()
+
+    def step(self, actions):
+        a = np.asarray(actions)
+        if a.dtype != np.int64:
+            if a.dtype.kind not in "iu":
+                raise invalid("actions", actions, "must be integers in 0..6")
+            a = a.astype(np.int64)
+        if a.shape != (self.num_envs,):
+            a = a.reshape(-1) if a.size == self.num_envs else a
+            if a.shape != (self.num_envs,):
+                raise invalid("actions", actions, f"must have shape ({self.num_envs},)")
+        self._core.step(a)
+        return (
+            self._observations(),
+            self._result(self._rewards),
+            self._result(self._terminated),
+            self._result(self._truncated),
+            self._info(),
+        )
+
+    def render(self):
+        return None
+
+    def close_extras(self, **kwargs: Any) -> None:
+        pass
+
+    @property
+    def target_cells(self) -> np.ndarray:
+        """Each env's target cell, ``(N, 3)``."""
+        return self._core.target_cells

@@ -1,0 +1,248 @@
+//! Conversions between Python values and the core's types, with errors that name the
+//! argument or field at fault.
+
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use serde_json::{Map, Number, Value};
+use sixaxis_core::{Cell, Error};
+
+use crate::errors::invalid_argument;
+
+/// Python object -> JSON value; `path` is the dotted field name used in errors.
+/// Non-finite floats are rejected here (JSON has no NaN) with an error naming the field.
+pub fn py_to_json(obj: &Bound<'_, PyAny>, path: &str) -> Result<Value, Error> {
+    let field = |p: &str| {
+        if p.is_empty() {
+            "<root>".to_string()
+        } else {
+            p.to_string()
+        }
+    };
+    if obj.is_none() {
+        return Ok(Value::Null);
+    }
+    if obj.is_instance_of::<PyBool>() {
+        return Ok(Value::Bool(obj.extract::<bool>().unwrap_or(false)));
+    }
+    if obj.is_instance_of::<PyInt>() {
+        if let Ok(v) = obj.extract::<i64>() {
+            return Ok(Value::Number(v.into()));
+        }
+        if let Ok(v) = obj.extract::<u64>() {
+            return Ok(Value::Number(v.into()));
+        }
+        return Err(Error::invalid(
+            field(path),
+            repr(obj),
+            "integer out of range",
+        ));
+    }
+    if obj.is_instance_of::<PyFloat>() {
+        let v: f64 = obj.extract().unwrap_or(f64::NAN);
+        return float(v, &field(path));
+    }
+    if let Ok(s) = obj.cast::<PyString>() {
+        return Ok(Value::String(s.to_string()));
+    }
+    if let Ok(d) = obj.cast::<PyDict>() {
+        let mut map = Map::new();
+        for (k, v) in d.iter() {
+            let key: String = k.extract().map_err(|_| {
+                Error::ScenarioParse(format!(
+                    "field `{}`: keys must be strings, got {}",
+                    field(path),
+                    repr(&k)
+                ))
+            })?;
+            let sub = if path.is_empty() {
+                key.clone()
+            } else {
+                format!("{path}.{key}")
+            };
+            map.insert(key, py_to_json(&v, &sub)?);
+        }
+        return Ok(Value::Object(map));
+    }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        let mut out = Vec::new();
+        for (i, item) in obj
+            .try_iter()
+            .map_err(|_| parse_err(path, obj))?
+            .enumerate()
+        {
+            let item = item.map_err(|_| parse_err(path, obj))?;
+            out.push(py_to_json(&item, &format!("{}[{i}]", field(path)))?);
+        }
+        return Ok(Value::Array(out));
+    }
+    // NumPy arrays and scalars, Mappings, Path objects.
+    if obj.hasattr("tolist").unwrap_or(false) {
+        if let Ok(list) = obj.call_method0("tolist") {
+            if !list.is(obj) {
+                return py_to_json(&list, path);
+            }
+        }
+    }
+    if obj.hasattr("__index__").unwrap_or(false) {
+        if let Ok(v) = obj.extract::<i64>() {
+            return Ok(Value::Number(v.into()));
+        }
+    }
+    if obj.hasattr("__float__").unwrap_or(false) {
+        if let Ok(v) = obj
+            .call_method0("__float__")
+            .and_then(|f| f.extract::<f64>())
+        {
+            return float(v, &field(path));
+        }
+    }
+    if obj.hasattr("keys").unwrap_or(false) {
+        if let Ok(d) = obj
+            .py()
+            .get_type::<PyDict>()
+            .call1((obj,))
+            .and_then(|d| Ok(d.cast_into::<PyDict>()?))
+        {
+            return py_to_json(d.as_any(), path);
+        }
+    }
+    if obj.hasattr("__fspath__").unwrap_or(false) {
+        if let Ok(s) = obj
+            .call_method0("__fspath__")
+            .and_then(|s| s.extract::<String>())
+        {
+            return Ok(Value::String(s));
+        }
+    }
+    Err(parse_err(path, obj))
+}
+
+fn float(v: f64, field: &str) -> Result<Value, Error> {
+    match Number::from_f64(v) {
+        Some(n) if v.is_finite() => Ok(Value::Number(n)),
+        _ => Err(Error::invalid(field, v, "must be a finite number")),
+    }
+}
+
+fn parse_err(path: &str, obj: &Bound<'_, PyAny>) -> Error {
+    let ty = obj
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into());
+    Error::ScenarioParse(format!(
+        "field `{}`: a value of type {ty} cannot be read as JSON",
+        if path.is_empty() { "<root>" } else { path }
+    ))
+}
+
+/// `repr(obj)` or a placeholder.
+pub fn repr(obj: &Bound<'_, PyAny>) -> String {
+    obj.repr()
+        .map(|r| r.to_string())
+        .unwrap_or_else(|_| "<unrepresentable>".to_string())
+}
+
+/// JSON value -> Python object (dicts, lists, str, int, float, bool, None).
+pub fn json_to_py<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+        Value::Number(n) => {
+            if let Some(i) = n.as_i64() {
+                i.into_pyobject(py)?.into_any()
+            } else if let Some(u) = n.as_u64() {
+                u.into_pyobject(py)?.into_any()
+            } else {
+                n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any()
+            }
+        }
+        Value::String(s) => PyString::new(py, s).into_any(),
+        Value::Array(a) => {
+            let items = a
+                .iter()
+                .map(|x| json_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?;
+            PyList::new(py, items)?.into_any()
+        }
+        Value::Object(m) => {
+            let d = PyDict::new(py);
+            for (k, x) in m {
+                d.set_item(k, json_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// Six finite joint angles from any sequence of numbers.
+pub fn joints6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 6]> {
+    let py = obj.py();
+    let v: Vec<f64> = obj
+        .extract()
+        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 6 numbers"))?;
+    let arr: [f64; 6] = v.as_slice().try_into().map_err(|_| {
+        invalid_argument(
+            py,
+            name,
+            repr(obj),
+            format!("must have 6 values, got {}", v.len()),
+        )
+    })?;
+    if arr.iter().any(|x| !x.is_finite()) {
+        return Err(invalid_argument(
+            py,
+            name,
+            repr(obj),
+            "every value must be finite",
+        ));
+    }
+    Ok(arr)
+}
+
+/// Three finite numbers from any sequence.
+pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 3]> {
+    let py = obj.py();
+    let v: Vec<f64> = obj
+        .extract()
+        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 3 numbers"))?;
+    let arr: [f64; 3] = v.as_slice().try_into().map_err(|_| {
+        invalid_argument(
+            py,
+            name,
+            repr(obj),
+            format!("must have 3 values, got {}", v.len()),
+        )
+    })?;
+    if arr.iter().any(|x| !x.is_finite()) {
+        return Err(invalid_argument(
+            py,
+            name,
+            repr(obj),
+            "every value must be finite",
+        ));
+    }
+    Ok(arr)
+}
+
+/// A grid cell from any sequence of 3 integers.
+pub fn cell(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Cell> {
+    let py = obj.py();
+    let v: Vec<i64> = obj
+        .extract()
+        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 3 integers"))?;
+    if v.len() != 3 {
+        return Err(invalid_argument(
+            py,
+            name,
+            repr(obj),
+            format!("must have 3 integers, got {}", v.len()),
+        ));
+    }
+    let mut c = [0i32; 3];
+    for i in 0..3 {
+        c[i] = i32::try_from(v[i])
+            .map_err(|_| invalid_argument(py, name, repr(obj), "coordinate out of range"))?;
+    }
+    Ok(c)
+}

@@ -1,0 +1,552 @@
+//! The engines behind the Python envs: `EnvCore` (one env) and `VecEnvCore` (a batch),
+//! both over `sixaxis_core::env`.
+
+use std::sync::Arc;
+
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
+use pyo3::intern;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use sixaxis_core::env::{
+    BatchBuffers, BatchEnv, EnvModel, EnvOptions, Episode, ObsBuffer, VECTOR_OBS_DIM,
+};
+use sixaxis_core::grid::Assist;
+use sixaxis_core::{Cell, Scenario};
+
+use crate::convert::{cell, repr};
+use crate::errors::{invalid_argument, run, run_attached};
+use crate::scenario::{scenario_from_any, PyScenario};
+
+/// Which observation the engine produces.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum ObsKind {
+    Vector,
+    Index,
+}
+
+fn obs_kind(py: Python<'_>, obs: &str) -> PyResult<ObsKind> {
+    match obs {
+        "vector" => Ok(ObsKind::Vector),
+        "index" => Ok(ObsKind::Index),
+        other => Err(invalid_argument(
+            py,
+            "obs",
+            format!("{other:?}"),
+            "must be \"vector\" or \"index\"",
+        )),
+    }
+}
+
+fn assist_of(py: Python<'_>, assist: Option<&Bound<'_, PyAny>>, s: &Scenario) -> PyResult<Assist> {
+    match assist {
+        None => Ok(Assist::from_scenario(s)),
+        Some(a) if a.is_none() => Ok(Assist::from_scenario(s)),
+        Some(a) => match a.extract::<bool>() {
+            Ok(true) => Ok(Assist::on()),
+            Ok(false) => Ok(Assist::off()),
+            Err(_) => Err(invalid_argument(
+                py,
+                "assist",
+                repr(a),
+                "must be True, False or None (the scenario's learning.assist_* flags)",
+            )),
+        },
+    }
+}
+
+fn cells_of(py: Python<'_>, obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<Cell>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for item in obj
+        .try_iter()
+        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of cells"))?
+    {
+        out.push(cell(&item?, name)?);
+    }
+    Ok(out)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_model(
+    py: Python<'_>,
+    scenario: Option<&Bound<'_, PyAny>>,
+    assist: Option<&Bound<'_, PyAny>>,
+    reward_scale: f64,
+    random_target: bool,
+    extra_obstacles: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Arc<Scenario>, Arc<EnvModel>)> {
+    let s = scenario_from_any(py, scenario)?;
+    let opts = EnvOptions {
+        assist: assist_of(py, assist, &s)?,
+        reward_scale,
+        random_target,
+        extra_obstacles: cells_of(py, extra_obstacles, "extra_obstacles")?,
+    };
+    let model = run_attached(py, || EnvModel::new(&s, opts))?;
+    Ok((s, Arc::new(model)))
+}
+
+fn cell_tuple<'py>(py: Python<'py>, c: Cell) -> PyResult<Bound<'py, PyTuple>> {
+    PyTuple::new(py, c)
+}
+
+fn action_of(py: Python<'_>, action: &Bound<'_, PyAny>) -> PyResult<usize> {
+    match action.extract::<i64>() {
+        Ok(a) if (0..6).contains(&a) => Ok(a as usize),
+        _ => Err(invalid_argument(
+            py,
+            "action",
+            repr(action),
+            "must be an integer in 0..6 (0:+x 1:-x 2:+y 3:-y 4:+z 5:-z)",
+        )),
+    }
+}
+
+/// One environment: episode state, observation and info. Used by `SixAxisAvoidEnv`.
+#[pyclass(name = "EnvCore", module = "sixaxis_avoid._core")]
+pub struct PyEnvCore {
+    scenario: Arc<Scenario>,
+    model: Arc<EnvModel>,
+    ep: Episode,
+    obs: ObsKind,
+    /// States visited since the reset (start included), when tracking is on.
+    path: Vec<u32>,
+    track_path: bool,
+}
+
+impl PyEnvCore {
+    fn observation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(match self.obs {
+            ObsKind::Vector => {
+                let mut buf = [0f32; VECTOR_OBS_DIM];
+                self.ep.write_vector_obs(&self.model, &mut buf);
+                PyArray1::from_slice(py, &buf).into_any()
+            }
+            ObsKind::Index => (self.ep.state() as i64).into_pyobject(py)?.into_any(),
+        })
+    }
+
+    fn info<'py>(
+        &self,
+        py: Python<'py>,
+        collided: bool,
+        success: bool,
+        detour: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item(intern!(py, "collided"), collided)?;
+        d.set_item(
+            intern!(py, "distance_to_target"),
+            self.ep.distance_to_target(&self.model),
+        )?;
+        d.set_item(
+            intern!(py, "cell"),
+            cell_tuple(py, self.model.world().cell_of(self.ep.state()))?,
+        )?;
+        d.set_item(intern!(py, "is_success"), success)?;
+        d.set_item(intern!(py, "detour_penalty"), detour)?;
+        Ok(d)
+    }
+}
+
+#[pymethods]
+impl PyEnvCore {
+    #[new]
+    #[pyo3(signature = (scenario=None, *, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None, track_path=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn py_new(
+        py: Python<'_>,
+        scenario: Option<&Bound<'_, PyAny>>,
+        obs: &str,
+        assist: Option<&Bound<'_, PyAny>>,
+        reward_scale: f64,
+        random_target: bool,
+        extra_obstacles: Option<&Bound<'_, PyAny>>,
+        track_path: bool,
+    ) -> PyResult<Self> {
+        let obs = obs_kind(py, obs)?;
+        let (scenario, model) = build_model(
+            py,
+            scenario,
+            assist,
+            reward_scale,
+            random_target,
+            extra_obstacles,
+        )?;
+        let mut ep = Episode::new(&model);
+        ep.reset(&model);
+        Ok(PyEnvCore {
+            scenario,
+            path: vec![ep.state() as u32],
+            model,
+            ep,
+            obs,
+            track_path,
+        })
+    }
+
+    /// Seed the generator of random targets.
+    fn seed(&mut self, seed: u64) {
+        self.ep.seed(seed);
+    }
+
+    /// Start a new episode: ``(observation, info)``.
+    fn reset<'py>(&mut self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+        let (ep, model) = (&mut self.ep, &self.model);
+        run_attached(py, || {
+            ep.reset(model);
+            Ok(())
+        })?;
+        self.path.clear();
+        self.path.push(self.ep.state() as u32);
+        Ok((self.observation(py)?, self.info(py, false, false, 0.0)?))
+    }
+
+    /// One step: ``(observation, reward, terminated, info)``.
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        action: &Bound<'py, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, f64, bool, Bound<'py, PyDict>)> {
+        let a = action_of(py, action)?;
+        let (ep, model) = (&mut self.ep, &self.model);
+        let out = run_attached(py, || Ok(ep.step(model, a)))?;
+        if self.track_path && !out.collided {
+            self.path.push(self.ep.state() as u32);
+        }
+        Ok((
+            self.observation(py)?,
+            out.reward,
+            out.reached,
+            self.info(py, out.collided, out.reached, out.detour_penalty)?,
+        ))
+    }
+
+    /// The vector observation of the current state (whatever `obs` is).
+    fn vector_observation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        let mut buf = [0f32; VECTOR_OBS_DIM];
+        self.ep.write_vector_obs(&self.model, &mut buf);
+        PyArray1::from_slice(py, &buf)
+    }
+
+    /// The scenario.
+    #[getter]
+    fn scenario(&self) -> PyScenario {
+        PyScenario {
+            inner: self.scenario.clone(),
+        }
+    }
+    #[getter]
+    fn num_states(&self) -> usize {
+        self.model.num_states()
+    }
+    /// The terminal's state number.
+    #[getter]
+    fn state(&self) -> usize {
+        self.ep.state()
+    }
+    /// Steps since the reset.
+    #[getter]
+    fn steps(&self) -> u32 {
+        self.ep.steps()
+    }
+    /// The terminal's cell.
+    #[getter]
+    fn cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        cell_tuple(py, self.model.world().cell_of(self.ep.state()))
+    }
+    /// This episode's target cell.
+    #[getter]
+    fn target_cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        cell_tuple(py, self.model.world().cell_of(self.ep.target()))
+    }
+    /// The start cell.
+    #[getter]
+    fn start_cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        cell_tuple(py, self.model.world().cell_of(self.model.world().start()))
+    }
+    /// The cell of a state.
+    fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
+        if state >= self.model.num_states() {
+            return Err(invalid_argument(
+                py,
+                "state",
+                state,
+                format!("must be < num_states = {}", self.model.num_states()),
+            ));
+        }
+        cell_tuple(py, self.model.world().cell_of(state))
+    }
+    /// The state of a cell, or None outside bounds.
+    fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+        Ok(self.model.world().state_of(cell(c, "cell")?))
+    }
+    /// All obstacle centres: the scenario's, then the extra ones.
+    #[getter]
+    fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        self.model
+            .world()
+            .obstacles()
+            .iter()
+            .map(|c| cell_tuple(py, *c))
+            .collect()
+    }
+    /// The extra obstacles given at construction.
+    #[getter]
+    fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        self.model
+            .options()
+            .extra_obstacles
+            .iter()
+            .map(|c| cell_tuple(py, *c))
+            .collect()
+    }
+    /// The cells random targets are drawn from.
+    #[getter]
+    fn target_cells<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        self.model
+            .target_cells()
+            .into_iter()
+            .map(|c| cell_tuple(py, c))
+            .collect()
+    }
+    /// Blocked flag per state (the terminal collides there), as a bool array.
+    #[getter]
+    fn blocked<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        let w = self.model.world();
+        let v: Vec<bool> = (0..w.num_states()).map(|s| w.is_blocked(s)).collect();
+        PyArray1::from_vec(py, v)
+    }
+    /// The cells visited since the reset, start included (only with ``track_path=True``).
+    #[getter]
+    fn path<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        self.path
+            .iter()
+            .map(|&s| cell_tuple(py, self.model.world().cell_of(s as usize)))
+            .collect()
+    }
+    /// `d_o`, distance from the start to this episode's target, cells.
+    #[getter]
+    fn start_distance(&self) -> f64 {
+        self.ep.start_distance(&self.model)
+    }
+    /// The reward scale.
+    #[getter]
+    fn reward_scale(&self) -> f64 {
+        self.model.options().reward_scale
+    }
+    /// ``(detour, distance)``: which assisted-learning terms shape the reward.
+    #[getter]
+    fn assist(&self) -> (bool, bool) {
+        let a = self.model.options().assist;
+        (a.detour, a.distance)
+    }
+}
+
+/// N environments in one Rust object, stepped together into NumPy arrays it owns.
+/// Used by `SixAxisAvoidVectorEnv`.
+#[pyclass(name = "VecEnvCore", module = "sixaxis_avoid._core")]
+pub struct PyVecEnvCore {
+    batch: BatchEnv,
+    obs: ObsKind,
+    obs_buf: Py<PyAny>,
+    rewards: Py<PyArray1<f64>>,
+    terminated: Py<PyArray1<bool>>,
+    truncated: Py<PyArray1<bool>>,
+    collided: Py<PyArray1<bool>>,
+    distance: Py<PyArray1<f64>>,
+    cells: Py<PyArray2<i32>>,
+}
+
+macro_rules! with_buffers {
+    ($self:ident, $py:ident, |$bufs:ident| $body:expr) => {{
+        let mut rw_r = $self.rewards.bind($py).try_readwrite()?;
+        let mut rw_te = $self.terminated.bind($py).try_readwrite()?;
+        let mut rw_tr = $self.truncated.bind($py).try_readwrite()?;
+        let mut rw_co = $self.collided.bind($py).try_readwrite()?;
+        let mut rw_d = $self.distance.bind($py).try_readwrite()?;
+        let mut rw_c = $self.cells.bind($py).try_readwrite()?;
+        let obs_any = $self.obs_buf.bind($py);
+        let mut rw_of;
+        let mut rw_oi;
+        let obs = match $self.obs {
+            ObsKind::Vector => {
+                rw_of = obs_any.cast::<PyArray2<f32>>()?.try_readwrite()?;
+                ObsBuffer::Vector(rw_of.as_slice_mut()?)
+            }
+            ObsKind::Index => {
+                rw_oi = obs_any.cast::<PyArray1<i64>>()?.try_readwrite()?;
+                ObsBuffer::Index(rw_oi.as_slice_mut()?)
+            }
+        };
+        let $bufs = BatchBuffers {
+            obs,
+            rewards: rw_r.as_slice_mut()?,
+            terminated: rw_te.as_slice_mut()?,
+            truncated: rw_tr.as_slice_mut()?,
+            collided: rw_co.as_slice_mut()?,
+            distance: rw_d.as_slice_mut()?,
+            cells: rw_c.as_slice_mut()?,
+        };
+        $body
+    }};
+}
+
+#[pymethods]
+impl PyVecEnvCore {
+    #[new]
+    #[pyo3(signature = (scenario=None, *, num_envs, max_episode_steps, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn py_new(
+        py: Python<'_>,
+        scenario: Option<&Bound<'_, PyAny>>,
+        num_envs: i64,
+        max_episode_steps: i64,
+        obs: &str,
+        assist: Option<&Bound<'_, PyAny>>,
+        reward_scale: f64,
+        random_target: bool,
+        extra_obstacles: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let obs = obs_kind(py, obs)?;
+        if !(1..=(1 << 24)).contains(&num_envs) {
+            return Err(invalid_argument(
+                py,
+                "num_envs",
+                num_envs,
+                "must be in 1..=16777216",
+            ));
+        }
+        if !(1..=u32::MAX as i64).contains(&max_episode_steps) {
+            return Err(invalid_argument(
+                py,
+                "max_episode_steps",
+                max_episode_steps,
+                "must be a positive integer",
+            ));
+        }
+        let n = num_envs as usize;
+        let (_, model) = build_model(
+            py,
+            scenario,
+            assist,
+            reward_scale,
+            random_target,
+            extra_obstacles,
+        )?;
+        let batch = run_attached(py, || BatchEnv::new(model, n, max_episode_steps as u32))?;
+        let obs_buf = match obs {
+            ObsKind::Vector => PyArray2::<f32>::zeros(py, [n, VECTOR_OBS_DIM], false).into_any(),
+            ObsKind::Index => PyArray1::<i64>::zeros(py, n, false).into_any(),
+        };
+        Ok(PyVecEnvCore {
+            batch,
+            obs,
+            obs_buf: obs_buf.unbind(),
+            rewards: PyArray1::zeros(py, n, false).unbind(),
+            terminated: PyArray1::from_vec(py, vec![false; n]).unbind(),
+            truncated: PyArray1::from_vec(py, vec![false; n]).unbind(),
+            collided: PyArray1::from_vec(py, vec![false; n]).unbind(),
+            distance: PyArray1::zeros(py, n, false).unbind(),
+            cells: PyArray2::zeros(py, [n, 3], false).unbind(),
+        })
+    }
+
+    /// Seed each env's generator of random targets (one seed per env).
+    fn seed(&mut self, py: Python<'_>, seeds: Vec<u64>) -> PyResult<()> {
+        run_attached(py, || self.batch.seed(&seeds))
+    }
+
+    /// Reset the envs where `mask` is true (all if None), writing into the buffers.
+    #[pyo3(signature = (mask=None))]
+    fn reset(&mut self, py: Python<'_>, mask: Option<PyReadonlyArray1<'_, bool>>) -> PyResult<()> {
+        let mask_vec: Option<Vec<bool>> = mask.map(|m| m.as_array().to_vec());
+        let batch = &mut self.batch;
+        with_buffers!(self, py, |bufs| run(py, || batch
+            .reset(mask_vec.as_deref(), bufs)))
+    }
+
+    /// Step all envs with `actions` (int64, one per env), writing into the buffers; the GIL
+    /// is released meanwhile.
+    fn step(&mut self, py: Python<'_>, actions: PyReadonlyArray1<'_, i64>) -> PyResult<()> {
+        if actions.len() != self.batch.len() {
+            return Err(invalid_argument(
+                py,
+                "actions",
+                format!("array of shape {:?}", actions.shape()),
+                format!("must have shape ({},)", self.batch.len()),
+            ));
+        }
+        let owned;
+        let acts: &[i64] = match actions.as_slice() {
+            Ok(s) => s,
+            Err(_) => {
+                owned = actions.as_array().to_vec();
+                &owned
+            }
+        };
+        let batch = &mut self.batch;
+        with_buffers!(self, py, |bufs| run(py, || batch.step(acts, bufs)))
+    }
+
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.batch.len()
+    }
+    #[getter]
+    fn num_states(&self) -> usize {
+        self.batch.model().num_states()
+    }
+    #[getter]
+    fn max_episode_steps(&self) -> u32 {
+        self.batch.max_episode_steps()
+    }
+    /// Observation buffer: ``(n, 13)`` float32 or ``(n,)`` int64.
+    #[getter]
+    fn observations(&self, py: Python<'_>) -> Py<PyAny> {
+        self.obs_buf.clone_ref(py)
+    }
+    #[getter]
+    fn rewards(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
+        self.rewards.clone_ref(py)
+    }
+    #[getter]
+    fn terminated(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
+        self.terminated.clone_ref(py)
+    }
+    #[getter]
+    fn truncated(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
+        self.truncated.clone_ref(py)
+    }
+    #[getter]
+    fn collided(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
+        self.collided.clone_ref(py)
+    }
+    #[getter]
+    fn distance_to_target(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
+        self.distance.clone_ref(py)
+    }
+    #[getter]
+    fn cells(&self, py: Python<'_>) -> Py<PyArray2<i32>> {
+        self.cells.clone_ref(py)
+    }
+    /// Steps since the reset, per env.
+    #[getter]
+    fn steps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        PyArray1::from_iter(py, self.batch.episodes().iter().map(|e| e.steps()))
+    }
+    /// Target cell per env, ``(n, 3)``.
+    #[getter]
+    fn target_cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i32>>> {
+        let w = self.batch.model().world();
+        let v: Vec<Vec<i32>> = self
+            .batch
+            .episodes()
+            .iter()
+            .map(|e| w.cell_of(e.target()).to_vec())
+            .collect();
+        Ok(PyArray2::from_vec2(py, &v)?)
+    }
+}

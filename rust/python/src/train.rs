@@ -1,0 +1,331 @@
+//! `sixaxis_avoid.train`: the core's tabular Q-learner (eqs. 6-8), GIL released.
+
+use std::sync::Mutex;
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable, TrainOptions};
+use sixaxis_core::{Cell, GridWorld, Scenario};
+
+use crate::convert::{cell, repr};
+use crate::errors::{invalid_argument, run, run_attached};
+use crate::scenario::{scenario_from_any, PyScenario};
+
+/// What :func:`train` returns.
+#[pyclass(name = "TrainResult", module = "sixaxis_avoid", frozen)]
+pub struct PyTrainResult {
+    world: GridWorld,
+    scenario: PyScenario,
+    path: Option<Vec<Cell>>,
+    steps_per_episode: Vec<u32>,
+    reached_per_episode: Vec<bool>,
+    converged_episode: Option<u32>,
+    total_steps: u64,
+    wall_time_s: f64,
+    q: QTable,
+    seed: u64,
+    episodes: u32,
+}
+
+fn cells_array<'py>(py: Python<'py>, cells: &[Cell]) -> Bound<'py, PyArray2<i32>> {
+    let mut a = Array2::<i32>::zeros((cells.len(), 3));
+    for (i, c) in cells.iter().enumerate() {
+        for k in 0..3 {
+            a[[i, k]] = c[k];
+        }
+    }
+    a.into_pyarray(py)
+}
+
+#[pymethods]
+impl PyTrainResult {
+    /// The learned path (greedy rollout, eq. 8) as a list of ``(x, y, z)`` cells, start to
+    /// target; ``None`` if the greedy rollout does not reach the target.
+    #[getter]
+    fn path<'py>(&self, py: Python<'py>) -> PyResult<Option<Vec<Bound<'py, PyTuple>>>> {
+        self.path
+            .as_ref()
+            .map(|p| p.iter().map(|c| PyTuple::new(py, c)).collect())
+            .transpose()
+    }
+    /// The learned path as an ``(k, 3)`` int32 array (empty ``(0, 3)`` if it failed).
+    #[getter]
+    fn path_array<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i32>> {
+        cells_array(py, self.path.as_deref().unwrap_or(&[]))
+    }
+    /// Whether the learned path reaches the target.
+    #[getter]
+    fn success(&self) -> bool {
+        self.path.is_some()
+    }
+    /// Steps of each episode, ``(episodes,)`` uint32.
+    #[getter]
+    fn steps_per_episode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        PyArray1::from_slice(py, &self.steps_per_episode)
+    }
+    /// Whether each episode reached the target, ``(episodes,)`` bool.
+    #[getter]
+    fn reached_per_episode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        PyArray1::from_slice(py, &self.reached_per_episode)
+    }
+    /// First episode (from 0) from which the greedy path no longer changed; ``None`` if the
+    /// final path fails.
+    #[getter]
+    fn converged_episode(&self) -> Option<u32> {
+        self.converged_episode
+    }
+    #[getter]
+    fn total_steps(&self) -> u64 {
+        self.total_steps
+    }
+    #[getter]
+    fn wall_time_s(&self) -> f64 {
+        self.wall_time_s
+    }
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.seed
+    }
+    #[getter]
+    fn episodes(&self) -> u32 {
+        self.episodes
+    }
+    /// The learned Q-table, ``(num_states, 6)`` float64 (a copy); row ``s`` is the state of
+    /// cell ``state_cells[s]``, columns the actions ``+x -x +y -y +z -z``.
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let n = self.q.num_states();
+        let a = Array2::from_shape_vec((n, 6), self.q.values().to_vec())
+            .map_err(|e| invalid_argument(py, "q", "shape", e.to_string()))?;
+        Ok(a.into_pyarray(py))
+    }
+    /// The cell of every state, ``(num_states, 3)`` int32.
+    #[getter]
+    fn state_cells<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i32>> {
+        let cells: Vec<Cell> = (0..self.world.num_states())
+            .map(|s| self.world.cell_of(s))
+            .collect();
+        cells_array(py, &cells)
+    }
+    /// The scenario trained on.
+    #[getter]
+    fn scenario(&self) -> PyScenario {
+        self.scenario.clone()
+    }
+    /// The state number of a cell (row of :attr:`q`), or None outside bounds.
+    fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+        Ok(self.world.state_of(cell(c, "cell")?))
+    }
+    /// Save the Q-table to a file (the core's checked format; see :func:`load_q`).
+    fn save_q(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        let (q, w) = (&self.q, &self.world);
+        run(py, || q.save(&path, w))
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "TrainResult(success={}, path_len={}, episodes={}, converged_episode={}, total_steps={}, wall_time_s={:.3})",
+            if self.path.is_some() { "True" } else { "False" },
+            self.path.as_ref().map_or(0, |p| p.len()),
+            self.steps_per_episode.len(),
+            self.converged_episode
+                .map_or_else(|| "None".to_string(), |e| e.to_string()),
+            self.total_steps,
+            self.wall_time_s
+        )
+    }
+}
+
+fn world_of(
+    py: Python<'_>,
+    s: &Scenario,
+    extra_obstacles: Option<&Bound<'_, PyAny>>,
+) -> PyResult<GridWorld> {
+    let mut extra = Vec::new();
+    if let Some(obj) = extra_obstacles.filter(|o| !o.is_none()) {
+        for item in obj.try_iter().map_err(|_| {
+            invalid_argument(
+                py,
+                "extra_obstacles",
+                repr(obj),
+                "must be a sequence of cells",
+            )
+        })? {
+            extra.push(cell(&item?, "extra_obstacles")?);
+        }
+    }
+    run_attached(py, || GridWorld::with_extra_obstacles(s, &extra))
+}
+
+fn q_from_array(
+    py: Python<'_>,
+    arr: PyReadonlyArray2<'_, f64>,
+    world: &GridWorld,
+) -> PyResult<QTable> {
+    let shape = arr.shape().to_vec();
+    if shape[1] != 6 || shape[0] != world.num_states() {
+        return Err(crate::errors::to_py(
+            py,
+            sixaxis_core::Error::QTableMismatch(format!(
+                "initial_q has shape {shape:?}, the world needs ({}, 6)",
+                world.num_states()
+            )),
+        ));
+    }
+    let values: Vec<f64> = arr.as_array().iter().copied().collect();
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(invalid_argument(
+            py,
+            "initial_q",
+            "array",
+            "every value must be finite",
+        ));
+    }
+    run_attached(py, || QTable::from_values(world.num_states(), values))
+}
+
+/// Learn a path with tabular Q-learning (eqs. 6-8) on a scenario.
+///
+/// Same arithmetic and random stream as the core (and the ``sixaxis train`` CLI): for the
+/// same scenario, seed, episodes and assist, path and Q-table values are identical.
+/// Keyword arguments left as ``None`` take the scenario's ``learning`` values.
+/// ``progress(episodes_done)`` is called about 100 times; an exception it raises is
+/// re-raised after training. The GIL is released while learning.
+#[pyfunction]
+#[pyo3(signature = (scenario=None, *, episodes=None, seed=None, assist=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn train(
+    py: Python<'_>,
+    scenario: Option<&Bound<'_, PyAny>>,
+    episodes: Option<i64>,
+    seed: Option<i64>,
+    assist: Option<bool>,
+    max_steps_per_episode: Option<i64>,
+    extra_obstacles: Option<&Bound<'_, PyAny>>,
+    initial_q: Option<PyReadonlyArray2<'_, f64>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyTrainResult> {
+    let s = scenario_from_any(py, scenario)?;
+    let mut opts = TrainOptions::from_scenario(&s);
+    if let Some(e) = episodes {
+        opts.episodes = u32::try_from(e)
+            .ok()
+            .filter(|&e| e > 0)
+            .ok_or_else(|| invalid_argument(py, "episodes", e, "must be in 1..=4294967295"))?;
+    }
+    if let Some(v) = seed {
+        opts.seed =
+            u64::try_from(v).map_err(|_| invalid_argument(py, "seed", v, "must be >= 0"))?;
+    }
+    if let Some(a) = assist {
+        opts.assist = if a {
+            sixaxis_core::Assist::on()
+        } else {
+            sixaxis_core::Assist::off()
+        };
+    }
+    if let Some(m) = max_steps_per_episode {
+        opts.max_steps_per_episode = u32::try_from(m).ok().filter(|&m| m > 0).ok_or_else(|| {
+            invalid_argument(py, "max_steps_per_episode", m, "must be in 1..=4294967295")
+        })?;
+    }
+    let world = world_of(py, &s, extra_obstacles)?;
+    let q0 = initial_q.map(|a| q_from_array(py, a, &world)).transpose()?;
+    let cb_error: Mutex<Option<PyErr>> = Mutex::new(None);
+    let result = {
+        let world = &world;
+        let opts = &opts;
+        let cb_error = &cb_error;
+        let progress = progress.as_ref();
+        run(py, move || {
+            let report = |done: u32| {
+                if let Some(cb) = progress {
+                    Python::attach(|py| {
+                        if let Err(e) = cb.call1(py, (done,)) {
+                            let mut slot = cb_error.lock().unwrap_or_else(|p| p.into_inner());
+                            slot.get_or_insert(e);
+                        }
+                    });
+                }
+            };
+            let progress_fn: Option<&dyn Fn(u32)> = if progress.is_some() {
+                Some(&report)
+            } else {
+                None
+            };
+            core_train(world, opts, q0, progress_fn)
+        })?
+    };
+    if let Some(e) = cb_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
+    }
+    Ok(PyTrainResult {
+        scenario: PyScenario { inner: s },
+        path: result.path,
+        steps_per_episode: result.steps_per_episode,
+        reached_per_episode: result.reached_per_episode,
+        converged_episode: result.converged_episode,
+        total_steps: result.total_steps,
+        wall_time_s: result.wall_time_s,
+        q: result.q,
+        seed: opts.seed,
+        episodes: opts.episodes,
+        world,
+    })
+}
+
+/// Load a Q-table file saved by :meth:`TrainResult.save_q` (or the CLI) for a scenario;
+/// raises :class:`QTableMismatchError` if it was learned on another grid or target.
+/// Returns the ``(num_states, 6)`` array.
+#[pyfunction]
+#[pyo3(signature = (path, scenario=None, *, extra_obstacles=None))]
+pub fn load_q<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    scenario: Option<&Bound<'py, PyAny>>,
+    extra_obstacles: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let s = scenario_from_any(py, scenario)?;
+    let world = world_of(py, &s, extra_obstacles)?;
+    let q = run(py, || QTable::load(&path, &world))?;
+    let n = q.num_states();
+    let a = Array2::from_shape_vec((n, 6), q.values().to_vec())
+        .map_err(|e| invalid_argument(py, "q", "shape", e.to_string()))?;
+    Ok(a.into_pyarray(py))
+}
+
+/// The greedy path (eq. 8) of a Q-table array on a scenario: list of cells, or None.
+#[pyfunction]
+#[pyo3(signature = (q, scenario=None, *, max_steps=None, extra_obstacles=None))]
+pub fn greedy_path_of<'py>(
+    py: Python<'py>,
+    q: PyReadonlyArray2<'py, f64>,
+    scenario: Option<&Bound<'py, PyAny>>,
+    max_steps: Option<u32>,
+    extra_obstacles: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Option<Vec<Bound<'py, PyTuple>>>> {
+    let s = scenario_from_any(py, scenario)?;
+    let world = world_of(py, &s, extra_obstacles)?;
+    let qt = q_from_array(py, q, &world)?;
+    let cap = max_steps.unwrap_or(s.learning.max_steps_per_episode);
+    greedy_path(&world, &qt, cap)
+        .map(|p| p.iter().map(|c| PyTuple::new(py, c)).collect())
+        .transpose()
+}
+
+/// The breadth-first shortest path of a scenario (list of cells, start to target), or None.
+#[pyfunction]
+#[pyo3(signature = (scenario=None, *, extra_obstacles=None))]
+pub fn shortest_path<'py>(
+    py: Python<'py>,
+    scenario: Option<&Bound<'py, PyAny>>,
+    extra_obstacles: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Option<Vec<Bound<'py, PyTuple>>>> {
+    let s = scenario_from_any(py, scenario)?;
+    let world = world_of(py, &s, extra_obstacles)?;
+    world
+        .shortest_path()
+        .map(|p| p.iter().map(|c| PyTuple::new(py, c)).collect())
+        .transpose()
+}

@@ -1,0 +1,24 @@
+"""Shared fixtures. Tests run headless: Matplotlib uses Agg."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import sixaxis_avoid
+
+
+@pytest.fixture(scope="session")
+def paper_simple() -> sixaxis_avoid.Scenario:
+    return sixaxis_avoid.Scenario("paper_simple")
+
+
+@pytest.fixture(scope="session")
+def near_target(paper_simple) -> sixaxis_avoid.Scenario:
+    """Target one cell below the start, short step cap: episodes end often both ways."""
+    return paper_simple.replace(
+        name="near_target", target=(0, -2, 3), learning={"max_steps_per_episode": 12}
+    )

@@ -1,0 +1,169 @@
+"""The native (Rust-batched) vector env against N single envs and Gymnasium's SyncVectorEnv."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import sixaxis_avoid as sa
+from gymnasium.vector import AutoresetMode
+from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
+
+N = 6
+CAP = 12
+
+
+def _native(scenario, **kw):
+    return gym.make_vec(
+        "SixAxisAvoid-v0",
+        num_envs=N,
+        vectorization_mode="vector_entry_point",
+        scenario=scenario,
+        max_episode_steps=CAP,
+        **kw,
+    )
+
+
+def test_make_vec_gives_native_env(paper_simple):
+    env = gym.make_vec("SixAxisAvoid-v0", num_envs=4)
+    assert isinstance(env, SixAxisAvoidVectorEnv)
+    assert isinstance(env, gym.vector.VectorEnv)
+    assert env.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
+    assert env.max_episode_steps == 1000
+    assert env.single_action_space == gym.spaces.Discrete(6)
+    assert env.action_space == gym.spaces.MultiDiscrete([6] * 4)
+    assert env.observation_space.shape == (4, 13)
+    obs, info = env.reset(seed=0)
+    assert obs.shape == (4, 13) and obs.dtype == np.float32
+    assert obs in env.observation_space
+    obs, rew, term, trunc, info = env.step(env.action_space.sample())
+    assert rew.dtype == np.float64 and term.dtype == np.bool_ and trunc.dtype == np.bool_
+    assert info["cell"].shape == (4, 3) and info["_cell"].all()
+
+
+@pytest.mark.parametrize(
+    ("obs_type", "random_target"),
+    [("vector", False), ("vector", True), ("index", False), ("goal", True)],
+)
+def test_native_matches_single_envs_step_for_step(near_target, obs_type, random_target):
+    kw = {"obs_type": obs_type, "random_target": random_target}
+    native = _native(near_target, **kw)
+    singles = [
+        gym.make("SixAxisAvoid-v0", scenario=near_target, max_episode_steps=CAP, **kw)
+        for _ in range(N)
+    ]
+    rng = np.random.default_rng(5)
+
+    def stack(xs):
+        if isinstance(xs[0], dict):
+            return {k: np.stack([x[k] for x in xs]) for k in xs[0]}
+        return np.array(xs)
+
+    obs, info = native.reset(seed=11)
+    ref = [e.reset(seed=11 + i) for i, e in enumerate(singles)]
+    np.testing.assert_equal(obs, stack([r[0] for r in ref]))
+    done = np.zeros(N, dtype=bool)
+    n_term = n_trunc = 0
+    for _ in range(200):
+        actions = rng.integers(0, 6, size=N)
+        obs, rew, term, trunc, info = native.step(actions)
+        exp = []
+        for i, e in enumerate(singles):
+            if done[i]:  # next-step autoreset: reset instead of stepping
+                o, inf = e.reset()
+                exp.append((o, 0.0, False, False, inf))
+            else:
+                exp.append(e.step(int(actions[i])))
+        np.testing.assert_equal(obs, stack([x[0] for x in exp]))
+        np.testing.assert_array_equal(rew, [x[1] for x in exp])
+        np.testing.assert_array_equal(term, [x[2] for x in exp])
+        np.testing.assert_array_equal(trunc, [x[3] for x in exp])
+        for key in ("collided", "distance_to_target", "is_success"):
+            np.testing.assert_array_equal(info[key], [x[4][key] for x in exp])
+        np.testing.assert_array_equal(info["cell"], [x[4]["cell"] for x in exp])
+        done = term | trunc
+        n_term += term.sum()
+        n_trunc += trunc.sum()
+    assert n_trunc > 0
+    assert random_target or n_term > 0
+
+
+def test_native_matches_sync_vector_env(near_target):
+    native = _native(near_target, random_target=True)
+    sync = gym.make_vec(
+        "SixAxisAvoid-v0",
+        num_envs=N,
+        vectorization_mode="sync",
+        scenario=near_target,
+        max_episode_steps=CAP,
+        random_target=True,
+    )
+    assert sync.metadata["autoreset_mode"] == native.metadata["autoreset_mode"]
+    a, _ = native.reset(seed=3)
+    b, _ = sync.reset(seed=3)
+    np.testing.assert_array_equal(a, b)
+    rng = np.random.default_rng(0)
+    for _ in range(150):
+        act = rng.integers(0, 6, size=N)
+        x, y = native.step(act), sync.step(act)
+        for k in range(4):
+            np.testing.assert_array_equal(x[k], y[k])
+        for key in ("collided", "distance_to_target", "is_success"):
+            np.testing.assert_array_equal(x[4][key], y[4][key])
+    # Reseeding reproduces the start of the run.
+    a2, _ = native.reset(seed=3)
+    np.testing.assert_array_equal(a, a2)
+
+
+def test_copy_false_reuses_buffers(near_target):
+    env = _native(near_target, copy=False)
+    obs0, _ = env.reset(seed=0)
+    obs1, rew1, *_ = env.step(np.zeros(N, dtype=np.int64))
+    assert obs1 is obs0  # the same preallocated array, rewritten in place
+    _, rew2, *_ = env.step(np.zeros(N, dtype=np.int64))
+    assert rew2 is rew1
+    env_copy = _native(near_target)
+    o0, _ = env_copy.reset(seed=0)
+    o1, *_ = env_copy.step(np.zeros(N, dtype=np.int64))
+    assert o1 is not o0
+
+
+def test_reset_mask(near_target):
+    env = _native(near_target)
+    env.reset(seed=0)
+    before, *_ = env.step(np.full(N, 4))  # everyone moves +z
+    mask = np.zeros(N, dtype=bool)
+    mask[[0, 3]] = True
+    obs, _ = env.reset(options={"reset_mask": mask})
+    start = gym.make("SixAxisAvoid-v0", scenario=near_target).reset(seed=0)[0]
+    np.testing.assert_array_equal(obs[mask], np.stack([start, start]))
+    np.testing.assert_array_equal(obs[~mask], before[~mask])
+
+
+def test_action_dtypes_accepted(near_target):
+    env = _native(near_target)
+    env.reset(seed=0)
+    for dt in (np.int8, np.uint8, np.int32, np.int64):
+        env.step(np.ones(N, dtype=dt))
+    env.step([1] * N)
+
+
+def test_native_vector_env_releases_gil_and_is_fast():
+    env = gym.make_vec("SixAxisAvoid-v0", num_envs=256, copy=False)
+    env.reset(seed=0)
+    actions = np.random.default_rng(0).integers(0, 6, size=(50, 256))
+    import time
+
+    t = time.perf_counter()
+    for a in actions:
+        env.step(a)
+    dt = time.perf_counter() - t
+    assert dt < 2.0  # very loose: debug builds are ~30x slower than release
+
+
+def test_arm_id_vector(paper_simple):
+    if not hasattr(sa._core, "unreachable_cells"):
+        pytest.skip("no pose planner in this build")
+    env = gym.make_vec("SixAxisAvoidArm-v0", num_envs=2)
+    env.reset(seed=0)
+    env.step(np.array([0, 1]))
