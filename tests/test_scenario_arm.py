@@ -12,7 +12,7 @@ import sixaxis_avoid as sa
 
 
 def test_builtins_and_properties(paper_simple):
-    assert set(sa.Scenario.builtin_names()) >= {"paper_simple", "paper_complex", "replan_shelf"}
+    assert set(sa.Scenario.builtin_names()) >= {"paper_simple", "paper_complex", "replan_clutter"}
     assert paper_simple == sa.Scenario() == sa.Scenario.load("paper_simple")
     assert paper_simple.start == (0, -2, 4) and paper_simple.target == (0, 3, 0)
     assert len(paper_simple.obstacles) == 19

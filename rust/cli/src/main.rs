@@ -98,6 +98,35 @@ enum Command {
         #[command(flatten)]
         out: OutArgs,
     },
+    /// Which free cells a clear arm pose reaches, and the best clearance at the target.
+    ///
+    /// Example: sixaxis reach --scenario paper_complex
+    Reach {
+        /// Scenario file or built-in name.
+        #[arg(long, value_name = "NAME_OR_FILE", default_value = "paper_simple")]
+        scenario: String,
+        #[command(flatten)]
+        out: OutArgs,
+    },
+    /// A random cluttered scenario (start and target connected and reachable by the arm).
+    ///
+    /// Example: sixaxis generate --seed 3 --density 0.1 --out envs/mine.json
+    Generate {
+        /// Seed; `generated:SEED` names the same scenario at the default density and bounds.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Fraction of the cells in bounds that become obstacles.
+        #[arg(long, default_value_t = 0.08)]
+        density: f64,
+        /// Smallest start-target distance, cells.
+        #[arg(long, default_value_t = 4.0)]
+        min_distance: f64,
+        /// Do not require a clear arm pose at the start and the target.
+        #[arg(long)]
+        no_arm_check: bool,
+        #[command(flatten)]
+        out: OutArgs,
+    },
     /// Run the paper's experiments: JSON, figures and docs/REPRODUCTION.md.
     ///
     /// Example: sixaxis reproduce --seeds 10 --out-dir results/reproduce
@@ -141,6 +170,40 @@ fn mat_rows(m: &nalgebra::Matrix3<f64>) -> Value {
     json!((0..3)
         .map(|r| (0..3).map(|c| m[(r, c)]).collect::<Vec<_>>())
         .collect::<Vec<_>>())
+}
+
+/// `sixaxis reach`: arm reachability of every free cell.
+fn reach(name: &str) -> Result<Value, Failure> {
+    let s = Scenario::load(name)?;
+    let planner = sixaxis_core::PosePlanner::from_scenario(&s);
+    let world = sixaxis_core::GridWorld::new(&s)?;
+    let mut no_ik = Vec::new();
+    let mut unreachable = Vec::new();
+    let mut free = 0usize;
+    for state in 0..world.num_states() {
+        if world.is_blocked(state) {
+            continue;
+        }
+        free += 1;
+        let c = world.cell_of(state);
+        match planner.best_clearance_at(c) {
+            None => no_ik.push(c),
+            Some(_) if !planner.cell_reachable(c) => unreachable.push(c),
+            Some(_) => {}
+        }
+    }
+    let best = planner.best_clearance_at(s.target);
+    Ok(json!({
+        "scenario": s.name,
+        "arm_safe_distance": s.arm_safe_distance,
+        "free_cells": free,
+        "no_ik_solution": no_ik,
+        "no_clear_pose": unreachable,
+        "target": s.target,
+        "target_best_clearance_cells": best.map(|b| b.0),
+        "target_best_pose_rad": best.map(|b| b.1),
+        "target_best_rpy_deg": best.map(|b| b.2),
+    }))
 }
 
 fn run(cli: Cli) -> Result<(), Failure> {
@@ -202,6 +265,26 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
         }
         Command::Reproduce { args, out } => emit(&reproduce::run(&args)?, &out),
+        Command::Reach { scenario, out } => emit(&reach(&scenario)?, &out),
+        Command::Generate {
+            seed,
+            density,
+            min_distance,
+            no_arm_check,
+            out,
+        } => {
+            let opts = sixaxis_core::generator::GeneratorOptions {
+                density,
+                min_start_target_distance: min_distance,
+                require_arm_reachable: !no_arm_check,
+                ..Default::default()
+            };
+            let s = sixaxis_core::generator::generate(&opts, seed)?;
+            emit(
+                &serde_json::to_value(&s).expect("scenarios serialise"),
+                &out,
+            )
+        }
     }
 }
 

@@ -1,78 +1,13 @@
 //! Pose planning (Algorithm 1): every plan is re-checked here without the planner, with a
 //! naive eq. 11 loop built on `segment_point_distance`.
 
-use nalgebra::Vector3;
-use sixaxis_core::clearance::{interpolate, segment_point_distance, Clearance};
-use sixaxis_core::kinematics::{
-    orientation_grid, rotation_from_rpy_deg, ArmPoints, Joints, TerminalPose,
-};
+use sixaxis_core::clearance::interpolate;
+use sixaxis_core::kinematics::{orientation_grid, rotation_from_rpy_deg, Joints, TerminalPose};
 use sixaxis_core::planner::{joint_distance, PosePlan, PosePlanner};
 use sixaxis_core::scenario::{Cell, ClearanceModel, Scenario};
 
-fn centre(c: Cell, cell_mm: f64) -> Vector3<f64> {
-    Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64) * cell_mm
-}
-
-/// Naive eq. 11: smallest distance from any obstacle centre to any polyline segment, cells.
-fn naive_clearance(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> f64 {
-    let mut m = f64::INFINITY;
-    for w in points.windows(2) {
-        for &o in obstacles {
-            m = m.min(segment_point_distance(&w[0], &w[1], &centre(o, cell_mm)) / cell_mm);
-        }
-    }
-    m
-}
-
-/// Every check of a plan, independent of the planner.
-fn check_poses(s: &Scenario, path: &[Cell], poses: &[sixaxis_core::planner::PosePoint]) {
-    let arm = s.arm();
-    let clearance = Clearance::from_scenario(s);
-    let steps = s.planning.interpolation_steps;
-    assert_eq!(poses[0].joints_rad, s.arm.beta0_rad());
-    for (i, p) in poses.iter().enumerate() {
-        assert_eq!(p.cell, path[i]);
-        let fk = arm.fk(&p.joints_rad);
-        let miss = (fk.position_mm - centre(p.cell, s.cell_mm)).norm();
-        if i > 0 {
-            assert!(
-                miss < 1e-6,
-                "pose {i}: terminal {miss} mm from the cell centre"
-            );
-            let want = rotation_from_rpy_deg(p.orientation_rpy_deg);
-            assert!((fk.rotation - want).amax() < 1e-9, "pose {i}: orientation");
-            for a in p.orientation_rpy_deg {
-                assert_eq!(a % 45.0, 0.0, "pose {i}: rpy on the 45-degree grid");
-            }
-            for q in p.joints_rad {
-                assert!(q > -std::f64::consts::PI && q <= std::f64::consts::PI);
-            }
-            let prev = &poses[i - 1].joints_rad;
-            for k in 1..=steps {
-                let q = interpolate(prev, &p.joints_rad, k as f64 / steps as f64);
-                let pts = arm.points_mm(&q);
-                assert!(clearance.pose_is_clear(&pts), "pose {i}, step {k}");
-                if s.planning.clearance_model == ClearanceModel::Centres {
-                    let c = naive_clearance(&pts, &s.obstacles, s.cell_mm);
-                    assert!(c > s.arm_safe_distance, "pose {i}, step {k}: clearance {c}");
-                }
-                if let Some(lims) = s.arm.joint_limits_deg {
-                    for (j, (a, [lo, hi])) in q.iter().zip(lims).enumerate() {
-                        let d = a.to_degrees();
-                        assert!(
-                            [d, d - 360.0, d + 360.0]
-                                .iter()
-                                .any(|x| *x >= lo && *x <= hi),
-                            "pose {i}, step {k}, joint {j}: {d} deg outside [{lo}, {hi}]"
-                        );
-                    }
-                }
-            }
-        } else {
-            assert!(miss < 0.1);
-        }
-    }
-}
+mod common;
+use common::{centre, check_poses, free_cells, naive_clearance};
 
 fn complete(plan: PosePlan) -> Vec<sixaxis_core::planner::PosePoint> {
     match plan {
@@ -318,62 +253,6 @@ fn best_clearance_at_target_matches_brute_force() {
             p.cell_reachable(s.target),
             best > s.arm_safe_distance,
             "{name}"
-        );
-    }
-}
-
-fn free_cells(s: &Scenario) -> Vec<Cell> {
-    let b = s.bounds;
-    let mut out = Vec::new();
-    for x in b.min[0]..=b.max[0] {
-        for y in b.min[1]..=b.max[1] {
-            for z in b.min[2]..=b.max[2] {
-                if !s.obstacles.contains(&[x, y, z]) {
-                    out.push([x, y, z]);
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Report for the integrator: free cells in bounds that no clear pose reaches.
-/// `cargo test -p sixaxis-core --release --test planner -- --ignored --nocapture`
-#[test]
-#[ignore = "report, prints the unreachable cells"]
-fn report_unreachable_cells() {
-    for name in ["paper_simple", "paper_complex", "replan_clutter"] {
-        let s = Scenario::builtin(name).unwrap();
-        let planner = PosePlanner::from_scenario(&s);
-        let free = free_cells(&s);
-        let mut no_ik = Vec::new();
-        let mut not_clear = Vec::new();
-        for &c in &free {
-            match planner.best_clearance_at(c) {
-                None => no_ik.push(c),
-                Some((best, ..)) if !planner.cell_reachable(c) => not_clear.push((c, best)),
-                Some(_) => {}
-            }
-        }
-        println!(
-            "{name} (d_p {}): {} free cells, {} without IK solution, {} with IK but no clear pose",
-            s.arm_safe_distance,
-            free.len(),
-            no_ik.len(),
-            not_clear.len()
-        );
-        println!("  no IK: {no_ik:?}");
-        println!(
-            "  not clear (best clearance): {:?}",
-            not_clear
-                .iter()
-                .map(|(c, b)| format!("{c:?}:{b:.3}"))
-                .collect::<Vec<_>>()
-        );
-        println!(
-            "  target {:?} best {:?}",
-            s.target,
-            planner.best_clearance_at(s.target).map(|b| b.0)
         );
     }
 }

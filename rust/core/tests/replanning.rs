@@ -1,0 +1,206 @@
+//! Algorithm 2 (learn, plan poses, re-plan) and the scenario generator. Every plan is
+//! re-checked without the planner (`common::check_poses`).
+
+mod common;
+
+use common::check_poses;
+use sixaxis_core::generator::{expand_names, generate, GeneratorOptions};
+use sixaxis_core::planner::PosePoint;
+use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};
+use sixaxis_core::{GridWorld, PosePlanner, Scenario};
+
+fn run(s: &Scenario, seed: u64) -> PlanResult {
+    let mut o = PlanOptions::from_scenario(s);
+    o.train.seed = seed;
+    plan(s, &o, None).unwrap()
+}
+
+/// Re-check a successful result's poses independently of the planner.
+fn check_result(s: &Scenario, r: &PlanResult) {
+    assert!(r.success, "{:?}", r.failure);
+    assert_eq!(r.failure, None);
+    assert_eq!(r.path.first(), Some(&s.start));
+    assert_eq!(r.path.last(), Some(&s.target));
+    assert_eq!(r.poses_rad.len(), r.path.len());
+    assert_eq!(r.orientations_rpy_deg.len(), r.path.len());
+    for w in r.path.windows(2) {
+        let d: i32 = (0..3).map(|i| (w[0][i] - w[1][i]).abs()).sum();
+        assert_eq!(d, 1, "path steps one cell at a time: {w:?}");
+        assert!(
+            !s.obstacles.contains(&w[1]),
+            "path enters an obstacle: {:?}",
+            w[1]
+        );
+        assert!(
+            !r.added_obstacles.contains(&w[1]),
+            "path enters an added obstacle"
+        );
+    }
+    let points: Vec<PosePoint> = r
+        .path
+        .iter()
+        .zip(&r.poses_rad)
+        .zip(&r.orientations_rpy_deg)
+        .map(|((&cell, &joints_rad), &orientation_rpy_deg)| PosePoint {
+            cell,
+            joints_rad,
+            orientation_rpy_deg,
+        })
+        .collect();
+    check_poses(s, &r.path, &points);
+}
+
+fn without_times(mut r: PlanResult) -> PlanResult {
+    r.wall_time_s = 0.0;
+    for round in &mut r.rounds {
+        round.learning_time_s = 0.0;
+    }
+    r
+}
+
+#[test]
+fn paper_simple_needs_no_replan() {
+    let s = Scenario::builtin("paper_simple").unwrap();
+    for seed in 0..3 {
+        let r = run(&s, seed);
+        check_result(&s, &r);
+        assert_eq!(r.replans, 0);
+        assert!(r.added_obstacles.is_empty());
+        assert_eq!(r.path.len() - 1, 9, "the learned path is as short as BFS's");
+    }
+}
+
+#[test]
+fn same_seed_same_plan() {
+    let s = Scenario::builtin("replan_clutter").unwrap();
+    let a = without_times(run(&s, 4));
+    let b = without_times(run(&s, 4));
+    assert_eq!(a, b);
+}
+
+#[test]
+fn replan_scenario_gets_a_replan_and_succeeds() {
+    let s = Scenario::builtin("replan_clutter").unwrap();
+    for seed in 0..3 {
+        let r = run(&s, seed);
+        check_result(&s, &r);
+        assert!(r.replans >= 1, "seed {seed}: no re-plan");
+        assert_eq!(r.added_obstacles.len() as u32, r.replans);
+        assert_eq!(r.rounds.len() as u32, r.replans + 1);
+        // Every round but the last stopped at the point it recorded (or the one before the target).
+        for (round, added) in r.rounds.iter().zip(&r.added_obstacles) {
+            let (index, cell) = round.blocked_at.expect("a re-planned round was blocked");
+            let path = round.path.as_ref().unwrap();
+            assert!(*added == cell || (cell == s.target && *added == path[index - 1]));
+        }
+        assert_eq!(r.rounds.last().unwrap().blocked_at, None);
+    }
+}
+
+#[test]
+fn greedy_pass_alone_is_the_papers_algorithm_1() {
+    // Budget 0: the paper's greedy pass. On paper_simple it succeeds, with the same poses
+    // as the backtracking search (which only differs after a dead end).
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let mut greedy = s.clone();
+    greedy.planning.backtrack_budget = 0;
+    assert_eq!(without_times(run(&greedy, 0)), without_times(run(&s, 0)));
+}
+
+#[test]
+fn unreachable_target_is_a_clear_failure() {
+    // (0, 5, 0): free for the terminal, but no arm pose reaches it with clearance.
+    let mut s = Scenario::builtin("paper_simple").unwrap();
+    s.target = [0, 5, 0];
+    s.validate().unwrap();
+    let planner = PosePlanner::from_scenario(&s);
+    assert!(!planner.cell_reachable(s.target));
+    let r = run(&s, 0);
+    assert!(!r.success);
+    let why = r.failure.expect("a reason");
+    assert!(why.contains("could not be reached"), "{why}");
+    assert!(r.replans <= s.planning.max_replans);
+    assert!(!r.added_obstacles.is_empty());
+    assert!(why.contains(&format!(
+        "({}, {}, {})",
+        r.added_obstacles[0][0], r.added_obstacles[0][1], r.added_obstacles[0][2]
+    )));
+}
+
+#[test]
+fn replan_cap_ends_the_loop() {
+    let mut s = Scenario::builtin("replan_clutter").unwrap();
+    s.planning.max_replans = 0;
+    let r = run(&s, 0);
+    assert!(!r.success);
+    assert_eq!(r.replans, 0);
+    let why = r.failure.unwrap();
+    assert!(why.starts_with("re-plan cap (0) reached"), "{why}");
+    assert_eq!(r.added_obstacles.len(), 1);
+}
+
+#[test]
+fn unlearned_path_is_a_clear_failure() {
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let mut o = PlanOptions::from_scenario(&s);
+    o.train.episodes = 1;
+    let r = plan(&s, &o, None).unwrap();
+    assert!(!r.success);
+    assert!(r
+        .failure
+        .unwrap()
+        .contains("does not reach the target after 1 episodes"));
+}
+
+#[test]
+fn generator_guarantees_hold_over_many_seeds() {
+    let opts = GeneratorOptions::default();
+    for seed in 0..40 {
+        let s = generate(&opts, seed).unwrap();
+        assert_eq!(
+            s,
+            generate(&opts, seed).unwrap(),
+            "seed {seed}: not deterministic"
+        );
+        s.validate().unwrap();
+        assert_eq!(s.name, format!("generated:{seed}"));
+        assert_eq!(Scenario::load(&s.name).unwrap(), s);
+        let world = GridWorld::new(&s).unwrap();
+        assert!(
+            world.shortest_path().is_some(),
+            "seed {seed}: start and target not connected"
+        );
+        let planner = PosePlanner::from_scenario(&s);
+        assert!(planner.cell_reachable(s.start), "seed {seed}: start");
+        assert!(planner.cell_reachable(s.target), "seed {seed}: target");
+        let expected = (opts.density * s.bounds.volume() as f64).round() as usize;
+        assert_eq!(s.obstacles.len(), expected);
+        let d: f64 = (0..3)
+            .map(|i| ((s.start[i] - s.target[i]) as f64).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(d >= opts.min_start_target_distance);
+    }
+    assert_ne!(generate(&opts, 1).unwrap(), generate(&opts, 2).unwrap());
+}
+
+#[test]
+fn generator_rejects_bad_options_and_expands_names() {
+    let bad = GeneratorOptions {
+        density: 0.9,
+        ..GeneratorOptions::default()
+    };
+    assert!(generate(&bad, 0)
+        .unwrap_err()
+        .to_string()
+        .contains("density"));
+    assert_eq!(
+        expand_names("paper_simple, generated:2..4").unwrap(),
+        ["paper_simple", "generated:2", "generated:3", "generated:4"]
+    );
+    assert!(expand_names("generated:5..2").is_err());
+    assert!(Scenario::load("generated:x")
+        .unwrap_err()
+        .to_string()
+        .contains("generated:x"));
+}
