@@ -115,28 +115,24 @@ impl Frame {
     }
 
     /// `self * RotX(alpha) TransX(a) RotZ(theta) TransZ(d)`.
+    ///
+    /// The local rotation is
+    /// `[[ct, -st, 0], [st ca, ct ca, -sa], [st sa, ct sa, ca]]`; multiplied out by columns,
+    /// with `e = R (0, ca, sa)`: new x = `R.x ct + e st`, new y = `-R.x st + e ct`,
+    /// new z = `-R.y sa + R.z ca`, and the origin moves by `R.x a + (new z) d`.
     #[inline]
     pub(crate) fn then_link(&self, l: &Link, theta: f64) -> Frame {
         let (st, ct) = (theta + l.offset).sin_cos();
-        // Local link transform (Craig):
-        // [ ct,     -st,     0,   a      ]
-        // [ st ca,  ct ca,  -sa, -sa d   ]
-        // [ st sa,  ct sa,   ca,  ca d   ]
-        let local_r = Matrix3::new(
-            ct,
-            -st,
-            0.0,
-            st * l.ca,
-            ct * l.ca,
-            -l.sa,
-            st * l.sa,
-            ct * l.sa,
-            l.ca,
-        );
-        let local_p = Vector3::new(l.a, -l.sa * l.d, l.ca * l.d);
+        let rx = self.r.column(0).into_owned();
+        let ry = self.r.column(1).into_owned();
+        let rz = self.r.column(2).into_owned();
+        let e = ry * l.ca + rz * l.sa;
+        let nz = rz * l.ca - ry * l.sa;
+        let nx = rx * ct + e * st;
+        let ny = e * ct - rx * st;
         Frame {
-            r: self.r * local_r,
-            p: self.p + self.r * local_p,
+            r: Matrix3::from_columns(&[nx, ny, nz]),
+            p: self.p + rx * l.a + nz * l.d,
         }
     }
 }
