@@ -7,6 +7,7 @@ bash scripts/setup.sh
 source .venv/bin/activate
 echo "== cargo fmt";    cargo fmt --all -- --check
 echo "== cargo clippy"; cargo clippy --workspace --all-targets --quiet -- -D warnings
+echo "== cargo doc";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet -p sixaxis-core -p sixaxis-cli
 echo "== ruff";         ruff check python tests scripts && ruff format --check python tests scripts
 echo "== cargo test";   cargo test --workspace --release
 echo "== pytest";       python -m pytest tests -q

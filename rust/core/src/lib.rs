@@ -15,7 +15,7 @@
 //! - [`planner`] — pose planning over a terminal path (Algorithm 1).
 //! - [`replanning`] — the integrated loop with re-planning (Algorithm 2).
 //! - [`generator`] — random cluttered scenarios for benchmarks.
-//! - [`env`] — RL environment logic: episodes, observations, batched envs (for Python).
+//! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type; [`io`] — atomic file output.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
@@ -27,6 +27,8 @@
 //! assert!(result.success, "{:?}", result.failure);
 //! assert_eq!(result.poses_rad.len(), result.path.len());
 //! ```
+
+#![warn(missing_docs)]
 
 pub mod clearance;
 pub mod env;
