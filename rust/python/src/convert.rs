@@ -175,18 +175,23 @@ pub fn json_to_py<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>
     })
 }
 
-/// Six finite joint angles from any sequence of numbers.
-pub fn joints6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 6]> {
+/// `N` finite numbers from any sequence; the error names `name` and the value.
+pub fn finite_array<const N: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; N]> {
     let py = obj.py();
-    let v: Vec<f64> = obj
-        .extract()
-        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 6 numbers"))?;
-    let arr: [f64; 6] = v.as_slice().try_into().map_err(|_| {
+    let v: Vec<f64> = obj.extract().map_err(|_| {
         invalid_argument(
             py,
             name,
             repr(obj),
-            format!("must have 6 values, got {}", v.len()),
+            format!("must be a sequence of {N} numbers"),
+        )
+    })?;
+    let arr: [f64; N] = v.as_slice().try_into().map_err(|_| {
+        invalid_argument(
+            py,
+            name,
+            repr(obj),
+            format!("must have {N} values, got {}", v.len()),
         )
     })?;
     if arr.iter().any(|x| !x.is_finite()) {
@@ -200,29 +205,30 @@ pub fn joints6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 6]> {
     Ok(arr)
 }
 
+/// Six finite joint angles from any sequence of numbers.
+pub fn joints6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 6]> {
+    finite_array::<6>(obj, name)
+}
+
 /// Three finite numbers from any sequence.
 pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 3]> {
+    finite_array::<3>(obj, name)
+}
+
+/// A list of grid cells from any iterable of cells; `None` gives an empty list.
+pub fn cells(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<Cell>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Vec::new());
+    };
     let py = obj.py();
-    let v: Vec<f64> = obj
-        .extract()
-        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 3 numbers"))?;
-    let arr: [f64; 3] = v.as_slice().try_into().map_err(|_| {
-        invalid_argument(
-            py,
-            name,
-            repr(obj),
-            format!("must have 3 values, got {}", v.len()),
-        )
-    })?;
-    if arr.iter().any(|x| !x.is_finite()) {
-        return Err(invalid_argument(
-            py,
-            name,
-            repr(obj),
-            "every value must be finite",
-        ));
+    let mut out = Vec::new();
+    for item in obj
+        .try_iter()
+        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of cells"))?
+    {
+        out.push(cell(&item?, name)?);
     }
-    Ok(arr)
+    Ok(out)
 }
 
 /// A grid cell from any sequence of 3 integers.

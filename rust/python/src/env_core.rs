@@ -54,20 +54,6 @@ fn assist_of(py: Python<'_>, assist: Option<&Bound<'_, PyAny>>, s: &Scenario) ->
     }
 }
 
-fn cells_of(py: Python<'_>, obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<Cell>> {
-    let Some(obj) = obj.filter(|o| !o.is_none()) else {
-        return Ok(Vec::new());
-    };
-    let mut out = Vec::new();
-    for item in obj
-        .try_iter()
-        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of cells"))?
-    {
-        out.push(cell(&item?, name)?);
-    }
-    Ok(out)
-}
-
 #[allow(clippy::too_many_arguments)]
 fn build_model(
     py: Python<'_>,
@@ -82,7 +68,7 @@ fn build_model(
         assist: assist_of(py, assist, &s)?,
         reward_scale,
         random_target,
-        extra_obstacles: cells_of(py, extra_obstacles, "extra_obstacles")?,
+        extra_obstacles: crate::convert::cells(extra_obstacles, "extra_obstacles")?,
     };
     let model = run_attached(py, || EnvModel::new(&s, opts))?;
     Ok((s, Arc::new(model)))

@@ -8,22 +8,11 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use sixaxis_core::env::{first_clear_pose, unreachable_cells as core_unreachable};
 use sixaxis_core::planner::{PosePlan, PosePoint};
-use sixaxis_core::{Cell, PosePlanner, Scenario};
+use sixaxis_core::{PosePlanner, Scenario};
 
-use crate::convert::{cell, joints6, repr};
+use crate::convert::{cell, joints6};
 use crate::errors::{invalid_argument, run};
 use crate::scenario::{scenario_from_any, PyScenario};
-
-fn cells_from(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Cell>> {
-    let mut out = Vec::new();
-    for item in obj
-        .try_iter()
-        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of cells"))?
-    {
-        out.push(cell(&item?, name)?);
-    }
-    Ok(out)
-}
 
 /// Free cells (start and target excluded) at which no clear pose of the whole arm exists
 /// (``PosePlanner.cell_reachable`` is false): the extra obstacles of ``arm_aware=True``.
@@ -135,7 +124,7 @@ impl PyPosePlanner {
         path: &Bound<'py, PyAny>,
         beta0_rad: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let cells = cells_from(py, path, "path")?;
+        let cells = crate::convert::cells(Some(path), "path")?;
         for (i, w) in cells.windows(2).enumerate() {
             let steps: i32 = (0..3).map(|k| (w[1][k] - w[0][k]).abs()).sum();
             if steps != 1 {
@@ -183,7 +172,7 @@ pub fn cells_reachable<'py>(
     scenario: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray1<bool>>> {
     let s = scenario_from_any(py, scenario)?;
-    let cs = cells_from(py, cells, "cells")?;
+    let cs = crate::convert::cells(Some(cells), "cells")?;
     let mask = run(py, || {
         let planner = PosePlanner::from_scenario(&s);
         Ok(cs
