@@ -216,7 +216,7 @@ impl Default for Planning {
             orientation_divisions: 8,
             max_replans: 20,
             clearance_model: ClearanceModel::Centres,
-            backtrack_budget: 20000,
+            backtrack_budget: 2000,
         }
     }
 }
