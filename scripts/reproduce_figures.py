@@ -24,9 +24,7 @@ import numpy as np
 
 def parse_args() -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument(
-        "--results", type=Path, default=Path("results/reproduce/reproduction.json")
-    )
+    p.add_argument("--results", type=Path, default=Path("results/reproduce/reproduction.json"))
     p.add_argument("--out-dir", type=Path, default=Path("results/reproduce"))
     p.add_argument(
         "--docs-dir",
@@ -59,12 +57,7 @@ def draw_cubes(ax, cells, color, alpha=0.35, size=1.0):
     faces = []
     for x, y, z in cells:
         c = np.array(
-            [
-                [x + dx, y + dy, z + dz]
-                for dx in (-h, h)
-                for dy in (-h, h)
-                for dz in (-h, h)
-            ]
+            [[x + dx, y + dy, z + dz] for dx in (-h, h) for dy in (-h, h) for dz in (-h, h)]
         )
         idx = [
             [0, 1, 3, 2],
@@ -77,9 +70,7 @@ def draw_cubes(ax, cells, color, alpha=0.35, size=1.0):
         faces.extend([c[i] for i in idx])
     if faces:
         ax.add_collection3d(
-            Poly3DCollection(
-                faces, facecolors=color, edgecolors="k", linewidths=0.2, alpha=alpha
-            )
+            Poly3DCollection(faces, facecolors=color, edgecolors="k", linewidths=0.2, alpha=alpha)
         )
 
 
@@ -160,9 +151,7 @@ def fig_path(s, path, dpi):
         )
         draw_cubes(ax, plan["added_obstacles"], "tab:red", alpha=0.5, size=0.6)
     status = "ok" if plan["success"] else "FAILED"
-    ax.set_title(
-        f"{s['name']}: terminal path (seed 0, {plan['replans']} re-plans, {status})"
-    )
+    ax.set_title(f"{s['name']}: terminal path (seed 0, {plan['replans']} re-plans, {status})")
     ax.legend(loc="upper left")
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
@@ -180,9 +169,7 @@ def fig_poses(s, path, dpi):
     n = len(points)
     for i, pts in enumerate(points):
         p = np.asarray(pts) / cell
-        ax.plot(
-            p[:, 0], p[:, 1], p[:, 2], "-o", color=cmap(i / max(n - 1, 1)), lw=1.5, ms=2
-        )
+        ax.plot(p[:, 0], p[:, 1], p[:, 2], "-o", color=cmap(i / max(n - 1, 1)), lw=1.5, ms=2)
     if n:
         terminal = np.asarray([pts[-1] for pts in points]) / cell
         ax.plot(
