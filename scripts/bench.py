@@ -31,6 +31,7 @@ RUST_GOALS = {
     "train_paper_simple_10k/assist_cpu": 100e6,
     "algorithm2/plan_paper_simple": 500e6,
     "algorithm2/plan_paper_complex": 500e6,
+    "algorithm2/plan_replan_clutter": 500e6,
 }
 
 
@@ -41,6 +42,9 @@ def parse_args() -> argparse.Namespace:
     p.add_argument("--skip-python", action="store_true")
     p.add_argument("--out", type=Path, default=ROOT / "results" / "bench" / "bench.json")
     p.add_argument("--report", type=Path, default=ROOT / "docs" / "PERFORMANCE.md")
+    p.add_argument(
+        "--render-only", action="store_true", help="rewrite the report from --out, run nothing"
+    )
     return p.parse_args()
 
 
@@ -155,7 +159,14 @@ def report(data: dict) -> str:
                 f"| {row['speedup_vs_sync']:.0f}x `SyncVectorEnv` ({row['sync_steps_per_s']:,.0f}) "
                 f"| {goal} | {'yes' if ok else 'no'} |"
             )
-        lines.append("")
+        lines += [
+            "",
+            "The vector env pays one Python call per batched step: at N = 16 a call takes about",
+            "4 µs, of which stepping the 16 envs is under 0.5 µs at the N = 1024 rate. Below N of",
+            "about 100 that fixed cost dominates, so the ratio over `SyncVectorEnv` is under 100x",
+            "at N = 16.",
+            "",
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -168,6 +179,10 @@ def write_atomic(path: Path, text: str) -> None:
 
 def main() -> None:
     args = parse_args()
+    if args.render_only:
+        write_atomic(args.report, report(json.loads(args.out.read_text())))
+        print(f"wrote {args.report} from {args.out}")
+        return
     data = {"machine": machine(), "quick": args.quick}
     if not args.skip_rust:
         data["rust"] = run_rust(args.quick)
