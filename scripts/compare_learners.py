@@ -81,7 +81,7 @@ FULL = {
     "scenarios": PAPER_SCENARIOS + ",generated:0..9",
     "seeds": "5",
     "episodes": 10_000,
-    "dqn_steps": 20_000,
+    "dqn_steps": 10_000,
     "dqn_eval_every": 500,
     "dqn_learning_starts": DQN_DEFAULTS["learning_starts"],
     "workers": 2,
@@ -133,7 +133,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         " re-runs of the episode prefix",
     )
     g = p.add_argument_group("DQN (Stable-Baselines3)")
-    g.add_argument("--dqn-steps", type=int, help="training budget in env steps (default 20000)")
+    g.add_argument("--dqn-steps", type=int, help="training budget in env steps (default 10000)")
     g.add_argument(
         "--dqn-eval-every",
         type=int,
@@ -718,9 +718,24 @@ def median_or_none(values: list[float]) -> float | None:
     return float(statistics.median(values)) if values else None
 
 
+def length_convergence(run: dict[str, Any]) -> dict[str, Any] | None:
+    """DQN: the first greedy evaluation from which every later one succeeds with the final
+    path length (the path itself may still swap between equally long ones); None if the
+    final path fails or the run has no evaluations (the Q-learners)."""
+    evals = run.get("eval_curve") or []
+    if not evals or not evals[-1]["success"]:
+        return None
+    final = evals[-1]["path_length"]
+    k = len(evals) - 1
+    while k > 0 and evals[k - 1]["success"] and evals[k - 1]["path_length"] == final:
+        k -= 1
+    return {"env_steps": evals[k]["env_steps"], "path_length": final}
+
+
 def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
     """Aggregate over runs (seeds, and scenarios for the group rows)."""
     n = len(runs)
+    stable = [s for s in map(length_convergence, runs) if s is not None]
     ok = [r for r in runs if r["success"]]
     ratios = [r["length_ratio"] for r in ok if r["length_ratio"] is not None]
     firsts = [r["first_success"] for r in runs if r["first_success"] is not None]
@@ -742,6 +757,7 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
         "convergence_rate": len(convs) / n if n else None,
         "convergence_steps_median": median_or_none([c["env_steps"] for c in convs]),
         "convergence_time_s_median": median_or_none([c["wall_time_s"] for c in convs]),
+        "length_convergence_steps_median": median_or_none([s["env_steps"] for s in stable]),
         "total_steps_median": median_or_none([r["total_steps"] for r in runs]),
         "wall_time_s_median": median_or_none([r["wall_time_s"] for r in runs]),
         "algorithm1_pass_rate": sum(alg1) / n if n else None,
@@ -749,6 +765,23 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
         "replans_mean": float(np.mean([a["replans"] for a in alg2])) if alg2 else None,
         "replans_max": int(max(a["replans"] for a in alg2)) if alg2 else None,
     }
+
+
+def summaries(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Per learner: per scenario, the paper group, the generated group, and all runs."""
+    out: dict[str, dict[str, Any]] = {}
+    for learner in result["config"]["learners"]:
+        mine = [r for r in result["runs"] if r["learner"] == learner]
+        per = {n: summarise([r for r in mine if r["scenario"] == n]) for n in result["scenarios"]}
+        paper = [r for r in mine if not r["scenario"].startswith("generated:")]
+        gen = [r for r in mine if r["scenario"].startswith("generated:")]
+        if paper:
+            per["paper"] = summarise(paper)
+        if gen:
+            per["generated"] = summarise(gen)
+        per["all"] = summarise(mine)
+        out[learner] = per
+    return out
 
 
 # --------------------------------------------------------------------------------------
@@ -890,6 +923,7 @@ COLUMNS = [
     "time to 1st success",
     "env steps to convergence",
     "time to convergence",
+    "DQN: env steps to a stable length",
     "arm: Alg. 1 passes",
     "arm: Alg. 2 success",
     "re-plans (mean, max)",
@@ -912,6 +946,7 @@ def table(result: dict[str, Any], groups: list[str]) -> list[str]:
                 fmt_time(s["first_success_time_s_median"]),
                 fmt_steps(s["convergence_steps_median"]),
                 fmt_time(s["convergence_time_s_median"]),
+                fmt_steps(s.get("length_convergence_steps_median")),
                 fmt(s["algorithm1_pass_rate"]),
                 fmt(s["algorithm2_success_rate"]),
                 f"{fmt(s['replans_mean'], '.1f')}, {fmt(s['replans_max'])}",
@@ -930,10 +965,15 @@ def headline(result: dict[str, Any]) -> list[str]:
     learners = [x for x in result["config"]["learners"] if x != "bfs" and x in overall]
     if not learners:
         return out
-    best = max(
-        learners,
-        key=lambda k: (overall[k]["success_rate"] or 0, -(overall[k]["length_ratio_mean"] or 9)),
-    )
+
+    def rank(k: str) -> tuple[float, float]:
+        s = overall[k]
+        return (s["success_rate"] or 0.0, -(s["length_ratio_mean"] or math.inf))
+
+    top = max(rank(k) for k in learners)
+    best = " and ".join(f"**{k}**" for k in learners if rank(k) == top)
+    if " and " in best:
+        best += " (tied on success rate and mean length)"
     for k in learners:
         s = overall[k]
         first = (
@@ -954,12 +994,13 @@ def headline(result: dict[str, Any]) -> list[str]:
             f"Algorithm 2 succeeds in {pct(s['algorithm2_success_rate'])} with "
             f"{fmt(s['replans_mean'], '.2f')} re-plans on average."
         )
-    out.insert(0, f"Most reliable learner over all scenarios and seeds: **{best}**.\n")
+    out.insert(0, f"Most reliable learner over all scenarios and seeds: {best}.\n")
     return out
 
 
 def supplement_section(path: Path) -> list[str]:
     sup = json.loads(path.read_text())
+    sup["summary"] = summaries(sup)  # with this version's definitions
     cfg, meta = sup["config"], sup["meta"]
     groups = ["all"] + [n for n in sup["scenarios"] if len(sup["scenarios"]) > 1]
     return [
@@ -985,6 +1026,9 @@ def write_report(result: dict[str, Any], path: Path, supplements: list[Path] = (
     paper = [n for n in result["scenarios"] if not n.startswith("generated:")]
     gen = [n for n in result["scenarios"] if n.startswith("generated:")]
     groups = ["all"] + (["paper"] if paper else []) + (["generated"] if gen else [])
+    import sixaxis_avoid as sa
+
+    rw, k = sa.Scenario("paper_simple").rewards, hp["reward_scale"]
     L = [
         "# Learner comparison",
         "",
@@ -997,7 +1041,10 @@ def write_report(result: dict[str, Any], path: Path, supplements: list[Path] = (
         f"Run {meta['date']} on {meta['machine']}; versions: "
         + ", ".join(f"{k} {v}" for k, v in meta["versions"].items())
         + f". Total wall time {meta['total_wall_time_s']:.0f} s "
-        f"({cfg['workers']} worker processes for DQN).",
+        f"({cfg['workers']} worker processes for DQN); the machine is shared: load average "
+        f"(1, 5, 15 min) {meta['load_average_at_start']} at the start, "
+        f"{meta['load_average_at_end']} at the end. Wall times are of this machine under "
+        "that load.",
         "",
         f"Scenarios: {', '.join(result['scenarios'])}. Seeds: {', '.join(map(str, cfg['seeds']))} "
         f"(the learner's seed; DQN's SB3 seed). Q-learners: {cfg['episodes']} episodes "
@@ -1043,6 +1090,11 @@ def write_report(result: dict[str, Any], path: Path, supplements: list[Path] = (
         "the greedy path never changed again). DQN: the first greedy evaluation (every "
         f"{cfg['dqn_eval_every']} env steps) from which the greedy path equals the final one. "
         "Runs whose final path fails have none (the median is over the others).",
+        "- **DQN: env steps to a stable length**: the first greedy evaluation from which every "
+        "later one reaches the target with the final path's length. DQN's greedy path often "
+        "keeps swapping between equally long paths, which the strict definition above counts "
+        "as not converged until the last evaluation. (The Q-learners' equivalent is not "
+        "exposed to Python; — there.)",
         "- **arm: Alg. 1 passes**: fraction of runs whose first learned path gets a clear "
         "whole-arm pose at every point (`PosePlanner.plan_poses`, Algorithm 1, from beta_0).",
         "- **arm: Alg. 2 success / re-plans**: the paper's Algorithm 2 (a point no pose reaches "
@@ -1062,9 +1114,16 @@ def write_report(result: dict[str, Any], path: Path, supplements: list[Path] = (
         *[f"| `{k}` | {v} |" for k, v in hp.items()],
         "",
         "Rewards: the env's (the paper's eq. 5, plus eqs. 9 and 10 when `assist` is on) times "
-        f"`reward_scale` = {hp['reward_scale']}: reaching the target +2.0, a step -1.5, a "
-        "collision -0.8, a repeated collision a further -23, a reversal after a collision -1.0, "
-        "distance assistance +0.004 per cell gained.",
+        f"`reward_scale` = {hp['reward_scale']}, with Table 1's values: reaching the target "
+        f"+{rw['target_reward'] * k:g}, a step -{rw['step_penalty'] * k:g}, a collision "
+        f"-{rw['collision_penalty'] * k:g}, a collision right after a collision a further "
+        f"-{rw['repeat_collision_penalty'] * k:g}, the opposite action right after a collision "
+        f"a further -{rw['reverse_after_collision_penalty'] * k:g}, distance assistance "
+        f"+{rw['distance_reward'] * k:g} per cell closer than at the start, per step.",
+        "",
+        "DQN's learned path is its greedy policy's from the start (see *success* above); its "
+        "training episodes end at the target or after the scenario's step cap (1000), as the "
+        "env is registered.",
         "",
         "## Figures",
         "",
@@ -1130,6 +1189,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "machine": machine(),
             "versions": versions(),
+            "load_average_at_start": [round(x, 2) for x in os.getloadavg()],
         },
         "config": {
             "scenarios": args.scenario_names,
@@ -1200,24 +1260,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for n, s in tasks:
             add("dqn", n, s, done[(n, s)])
 
-    # Summaries per learner: per scenario, paper group, generated group, all.
-    summary: dict[str, dict[str, Any]] = {}
-    for learner in args.learner_list:
-        mine = [r for r in result["runs"] if r["learner"] == learner]
-        per = {n: summarise([r for r in mine if r["scenario"] == n]) for n in args.scenario_names}
-        paper = [r for r in mine if not r["scenario"].startswith("generated:")]
-        gen = [r for r in mine if r["scenario"].startswith("generated:")]
-        if paper:
-            per["paper"] = summarise(paper)
-        if gen:
-            per["generated"] = summarise(gen)
-        per["all"] = summarise(mine)
-        summary[learner] = per
-    result["summary"] = summary
+    result["summary"] = summaries(result)
 
     args.out_dir.mkdir(parents=True, exist_ok=True)
     result["figures"] = plot_curves(result, args.out_dir)
     result["meta"]["total_wall_time_s"] = time.perf_counter() - t_start
+    result["meta"]["load_average_at_end"] = [round(x, 2) for x in os.getloadavg()]
     atomic_write_text(args.out_dir / "compare.json", json.dumps(result, indent=1) + "\n")
     if not args.no_report:
         write_report(result, args.report, args.supplement)

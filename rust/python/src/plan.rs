@@ -159,7 +159,7 @@ impl PyPlanResult {
     }
 }
 
-/// An integer keyword in `0..=max` (bools rejected), or `None`.
+/// An integer keyword in `min..=max` (bools rejected), or `None` when absent.
 fn uint_arg(
     py: Python<'_>,
     name: &str,
