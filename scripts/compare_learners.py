@@ -290,12 +290,20 @@ def dqn_hyperparameters(args: argparse.Namespace) -> dict[str, Any]:
 # Small helpers
 
 
+def _umask_mode() -> int:
+    """0o666 less the process umask: what a plain ``open(..., "w")`` would give."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def atomic_write_text(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
+        os.chmod(tmp, _umask_mode())  # mkstemp makes 0600 files
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -308,6 +316,7 @@ def atomic_savefig(fig: Any, path: Path) -> None:
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=110)
+        os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -838,7 +847,7 @@ def plot_curves(result: dict[str, Any], out_dir: Path) -> list[str]:
         ax.set_title(
             f"{name}: learning curves over {len(result['config']['seeds'])} seeds (band: min-max)"
         )
-        ax.legend(fontsize=8, loc="upper right")
+        ax.legend(fontsize=8, loc="lower left")
         ax.grid(True, which="major", alpha=0.3)
         fig.tight_layout()
         path = out_dir / f"curves_{re.sub(r'[^A-Za-z0-9_]+', '_', name)}.png"
@@ -872,8 +881,9 @@ def plot_curves(result: dict[str, Any], out_dir: Path) -> list[str]:
         for n in names
     ):
         axes[1].set_yscale("log")
-    axes[0].legend(fontsize=8)
-    fig.tight_layout()
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.93))
     atomic_savefig(fig, out_dir / "summary.png")
     plt.close(fig)
     written.append("summary.png")
@@ -998,6 +1008,64 @@ def headline(result: dict[str, Any]) -> list[str]:
     return out
 
 
+def observations(result: dict[str, Any]) -> list[str]:
+    """Facts read off the per-scenario summaries (no interpretation beyond counting)."""
+    out = []
+    summary, names = result["summary"], list(result["scenarios"])
+    for learner in result["config"]["learners"]:
+        if learner == "bfs":
+            continue
+        per = summary.get(learner, {})
+        never = [n for n in names if per.get(n, {}).get("success_rate") == 0.0]
+        always = [n for n in names if per.get(n, {}).get("success_rate") == 1.0]
+        out.append(
+            f"- {learner}: greedy path reaches the target on every seed in {len(always)} of "
+            f"{len(names)} scenarios; on no seed in "
+            + (f"{len(never)} ({', '.join(never)})" if never else "0")
+            + "."
+        )
+    bfs = summary.get("bfs", {})
+    for learner in ("q_assist", "q_plain"):
+        per = summary.get(learner)
+        if per is None or not bfs:
+            continue
+        worse = [
+            n
+            for n in names
+            if per[n]["success_rate"] == 1.0
+            and per[n]["algorithm2_success_rate"] < bfs[n]["algorithm2_success_rate"]
+        ]
+        better = [
+            n
+            for n in names
+            if per[n]["algorithm2_success_rate"] > bfs[n]["algorithm2_success_rate"]
+        ]
+        if worse or better:
+            out.append(
+                f"- Algorithm 2 depends on the path it starts from: {learner} succeeds less often "
+                f"than with the BFS path on {', '.join(worse) or 'none'}, more often on "
+                f"{', '.join(better) or 'none'} (re-plans and failure reasons per run are in the "
+                "JSON)."
+            )
+    blocked = [n for n in names if bfs and bfs[n]["algorithm1_pass_rate"] == 0.0]
+    if blocked:
+        learned_pass = [
+            n
+            for n in blocked
+            if any(
+                (summary[k].get(n, {}).get("algorithm1_pass_rate") or 0) > 0
+                for k in summary
+                if k != "bfs"
+            )
+        ]
+        out.append(
+            "- The whole arm cannot follow the BFS optimal path (Algorithm 1 blocks) on "
+            f"{', '.join(blocked)}; on {', '.join(learned_pass) or 'none of them'} some learned "
+            "path passes Algorithm 1 without a re-plan."
+        )
+    return out
+
+
 def supplement_section(path: Path) -> list[str]:
     sup = json.loads(path.read_text())
     sup["summary"] = summaries(sup)  # with this version's definitions
@@ -1054,6 +1122,10 @@ def write_report(result: dict[str, Any], path: Path, supplements: list[Path] = (
         "## Headline",
         "",
         *headline(result),
+        "",
+        "## Observations",
+        "",
+        *observations(result),
         "",
         "## Summary (all runs of a group pooled)",
         "",
