@@ -10,6 +10,7 @@ mod arm;
 mod convert;
 mod env_core;
 mod errors;
+mod plan;
 mod planner;
 mod scenario;
 mod train;
@@ -59,6 +60,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(planner::unreachable_cells, m)?)?;
     m.add_function(wrap_pyfunction!(planner::clear_pose_at, m)?)?;
     m.add_function(wrap_pyfunction!(planner::cells_reachable, m)?)?;
+    m.add_class::<plan::PyPlanResult>()?;
+    m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::generate_scenario, m)?)?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     m.add("DEFAULT_SCENARIO", scenario::DEFAULT_SCENARIO)?;
     m.add_function(wrap_pyfunction!(_raise_core_error, m)?)?;

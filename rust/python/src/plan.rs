@@ -1,0 +1,310 @@
+//! `sixaxis_avoid.plan` (Algorithm 2) and `sixaxis_avoid.generate_scenario` (the core's
+//! random cluttered scenarios). Thin: argument checks here, everything else in the core,
+//! long calls through [`crate::errors::run`] (GIL released, panics caught).
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyTuple};
+use sixaxis_core::generator::{generate, GeneratorOptions};
+use sixaxis_core::replanning::{plan as core_plan, PlanOptions, PlanResult};
+use sixaxis_core::scenario::Bounds;
+use sixaxis_core::{Assist, Cell};
+
+use crate::convert::{cell, json_to_py, repr};
+use crate::errors::{invalid_argument, run};
+use crate::scenario::{scenario_from_any, PyScenario};
+
+/// What :func:`plan` returns: the core's ``PlanResult`` (Algorithm 2), read-only.
+///
+/// :meth:`to_dict` is the JSON of ``sixaxis plan`` (same serialisation code).
+#[pyclass(name = "PlanResult", module = "sixaxis_avoid", frozen)]
+pub struct PyPlanResult {
+    inner: PlanResult,
+}
+
+fn tuples<'py>(py: Python<'py>, cells: &[Cell]) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+    cells.iter().map(|c| PyTuple::new(py, c)).collect()
+}
+
+fn rows<'py, const N: usize>(py: Python<'py>, v: &[[f64; N]]) -> Bound<'py, PyArray2<f64>> {
+    let mut a = Array2::<f64>::zeros((v.len(), N));
+    for (i, r) in v.iter().enumerate() {
+        for (j, x) in r.iter().enumerate() {
+            a[[i, j]] = *x;
+        }
+    }
+    a.into_pyarray(py)
+}
+
+/// Serialise a core value with serde_json (the CLI's serialisation): it cannot fail for
+/// these types, but a failure would still surface as a Python error rather than a panic.
+macro_rules! to_value {
+    ($py:expr, $v:expr) => {
+        serde_json::to_value($v)
+            .map_err(|e| crate::errors::invalid_argument($py, "result", "?", e.to_string()))
+    };
+}
+
+#[pymethods]
+impl PyPlanResult {
+    /// Whether every path point got a safe pose.
+    #[getter]
+    fn success(&self) -> bool {
+        self.inner.success
+    }
+    /// The final terminal path, ``(x, y, z)`` cells from start to target (the last learned
+    /// path on failure; empty if no path was learned).
+    #[getter]
+    fn path<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        tuples(py, &self.inner.path)
+    }
+    /// One pose per path point, start included: ``(k, 6)`` float64, radians (``(0, 6)`` on
+    /// failure).
+    #[getter]
+    fn poses_rad<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows(py, &self.inner.poses_rad)
+    }
+    /// The terminal orientation ``(rt_x, rt_y, rt_z)`` chosen at each path point: ``(k, 3)``
+    /// float64, degrees.
+    #[getter]
+    fn orientations_rpy_deg<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows(py, &self.inner.orientations_rpy_deg)
+    }
+    /// Number of re-plans (rounds after the first).
+    #[getter]
+    fn replans(&self) -> u32 {
+        self.inner.replans
+    }
+    /// Points recorded as new obstacles (for the terminal), in order.
+    #[getter]
+    fn added_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        tuples(py, &self.inner.added_obstacles)
+    }
+    /// ``None`` on success; otherwise why, naming the points that could not be reached.
+    #[getter]
+    fn failure(&self) -> Option<&str> {
+        self.inner.failure.as_deref()
+    }
+    /// Per-round learning figures: a list of dicts with ``added_obstacles`` (count before
+    /// the round), ``path`` (or ``None``), ``converged_episode``, ``total_steps``,
+    /// ``learning_time_s`` and ``blocked_at`` (``[index, [x, y, z]]`` or ``None``).
+    #[getter]
+    fn rounds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &to_value!(py, &self.inner.rounds)?)
+    }
+    /// Wall time of the whole run, seconds.
+    #[getter]
+    fn wall_time_s(&self) -> f64 {
+        self.inner.wall_time_s
+    }
+    /// Seed of the learner.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.seed
+    }
+    /// The scenario's own obstacles (before any were added).
+    #[getter]
+    fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        tuples(py, &self.inner.obstacles)
+    }
+    /// Edge of a cell, mm.
+    #[getter]
+    fn cell_mm(&self) -> f64 {
+        self.inner.cell_mm
+    }
+    /// d_p, cells: the whole arm's safe distance (eq. 11).
+    #[getter]
+    fn arm_safe_distance(&self) -> f64 {
+        self.inner.arm_safe_distance
+    }
+    /// t: joint-space interpolation steps between two poses (Algorithm 1).
+    #[getter]
+    fn interpolation_steps(&self) -> u32 {
+        self.inner.interpolation_steps
+    }
+    /// The clearance model of the arm, as in the scenario file (a dict).
+    #[getter]
+    fn clearance_model<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &to_value!(py, &self.inner.clearance_model)?)
+    }
+    /// Start cell.
+    #[getter]
+    fn start<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, self.inner.start)
+    }
+    /// Target cell.
+    #[getter]
+    fn target<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, self.inner.target)
+    }
+    /// The JSON of ``sixaxis plan`` as a dict (serialised by the core, so the two agree).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &to_value!(py, &self.inner)?)
+    }
+    /// The JSON of ``sixaxis plan`` as text (pretty-printed).
+    fn to_json(&self, py: Python<'_>) -> PyResult<String> {
+        serde_json::to_string_pretty(&self.inner)
+            .map_err(|e| invalid_argument(py, "result", "?", e.to_string()))
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "PlanResult(success={}, path_len={}, replans={}, added_obstacles={}, wall_time_s={:.3})",
+            if self.inner.success { "True" } else { "False" },
+            self.inner.path.len(),
+            self.inner.replans,
+            self.inner.added_obstacles.len(),
+            self.inner.wall_time_s
+        )
+    }
+}
+
+/// An integer keyword in `min..=max` (bools rejected), or `None` when absent.
+fn uint_arg(
+    py: Python<'_>,
+    name: &str,
+    obj: Option<&Bound<'_, PyAny>>,
+    min: u64,
+    max: u64,
+) -> PyResult<Option<u64>> {
+    let Some(o) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    let bad = || {
+        let domain = if max == u64::MAX {
+            format!("must be an integer >= {min}")
+        } else {
+            format!("must be an integer in {min}..={max}")
+        };
+        invalid_argument(py, name, repr(o), domain)
+    };
+    if o.is_instance_of::<PyBool>() {
+        return Err(bad());
+    }
+    let v: i128 = o.extract().map_err(|_| bad())?;
+    if v < min as i128 || v > max as i128 {
+        return Err(bad());
+    }
+    Ok(Some(v as u64))
+}
+
+fn finite(py: Python<'_>, name: &str, v: f64) -> PyResult<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(invalid_argument(py, name, v, "must be a finite number"))
+    }
+}
+
+/// Run Algorithm 2 on a scenario: learn a terminal path (tabular Q-learning), plan the arm's
+/// poses along it (Algorithm 1), and re-plan around every path point no safe pose reaches.
+///
+/// ``seed`` and ``episodes`` default to the scenario's ``learning`` values; ``assist``
+/// switches both assisted-learning strategies (eqs. 9, 10) on or off (``None``: the
+/// scenario's flags); ``max_replans`` defaults to the scenario's ``planning.max_replans``.
+/// Same arithmetic and random stream as ``sixaxis plan``: for the same arguments the result
+/// is the same (wall times aside). A plan that cannot be completed is returned with
+/// ``success=False`` and a ``failure`` reason; bad arguments raise
+/// :class:`InvalidArgumentError`. The GIL is released while planning.
+#[pyfunction]
+#[pyo3(signature = (scenario=None, seed=None, episodes=None, assist=Some(true), max_replans=None))]
+pub fn plan(
+    py: Python<'_>,
+    scenario: Option<&Bound<'_, PyAny>>,
+    seed: Option<&Bound<'_, PyAny>>,
+    episodes: Option<&Bound<'_, PyAny>>,
+    assist: Option<bool>,
+    max_replans: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyPlanResult> {
+    let s = scenario_from_any(py, scenario)?;
+    let mut opts = PlanOptions::from_scenario(&s);
+    if let Some(v) = uint_arg(py, "seed", seed, 0, u64::MAX)? {
+        opts.train.seed = v;
+    }
+    if let Some(v) = uint_arg(py, "episodes", episodes, 1, u32::MAX as u64)? {
+        opts.train.episodes = v as u32;
+    }
+    if let Some(a) = assist {
+        opts.train.assist = if a { Assist::on() } else { Assist::off() };
+    }
+    if let Some(v) = uint_arg(py, "max_replans", max_replans, 0, u32::MAX as u64)? {
+        opts.max_replans = v as u32;
+    }
+    let inner = run(py, || core_plan(&s, &opts, None))?;
+    Ok(PyPlanResult { inner })
+}
+
+fn bounds_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Bounds> {
+    let bad = || {
+        invalid_argument(
+            py,
+            "bounds",
+            repr(obj),
+            "must be a pair of cells (min, max) or a dict {\"min\": cell, \"max\": cell}",
+        )
+    };
+    let (lo, hi) = if let Ok(d) = obj.cast::<PyDict>() {
+        let lo = d.get_item("min")?.ok_or_else(bad)?;
+        let hi = d.get_item("max")?.ok_or_else(bad)?;
+        if d.len() != 2 {
+            return Err(bad());
+        }
+        (lo, hi)
+    } else {
+        let items: Vec<Bound<'_, PyAny>> = obj
+            .try_iter()
+            .map_err(|_| bad())?
+            .collect::<PyResult<_>>()
+            .map_err(|_| bad())?;
+        if items.len() != 2 {
+            return Err(bad());
+        }
+        let mut it = items.into_iter();
+        (it.next().ok_or_else(bad)?, it.next().ok_or_else(bad)?)
+    };
+    Ok(Bounds {
+        min: cell(&lo, "bounds")?,
+        max: cell(&hi, "bounds")?,
+    })
+}
+
+/// A random cluttered scenario, deterministic per ``seed`` (the core's generator).
+///
+/// Unit-cube clutter at ``density`` (fraction of the cells, in [0, 0.6]) inside ``bounds``
+/// (``(min_cell, max_cell)``, inclusive; default ``((-3, -3, -2), (3, 5, 5))``, the paper's
+/// box); start and target at least ``min_start_target_distance`` cells apart and connected
+/// (breadth-first search); with ``require_arm_reachable`` both reachable by a clear arm pose.
+/// beta_0 is the clearest arm pose at the start. Every other field comes from ``template``
+/// (a scenario name or file). With the default options, seed ``i`` gives the scenario that
+/// ``Scenario.load("generated:i")`` loads. Raises :class:`InvalidArgumentError` for a bad
+/// keyword, or when ``max_attempts`` draws find no scenario meeting the guarantees.
+#[pyfunction]
+#[pyo3(signature = (seed, density=0.08, bounds=None, min_start_target_distance=4.0, require_arm_reachable=true, template="paper_simple", max_attempts=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn generate_scenario(
+    py: Python<'_>,
+    seed: &Bound<'_, PyAny>,
+    density: f64,
+    bounds: Option<&Bound<'_, PyAny>>,
+    min_start_target_distance: f64,
+    require_arm_reachable: bool,
+    template: &str,
+    max_attempts: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyScenario> {
+    let mut opts = GeneratorOptions::default();
+    let seed = uint_arg(py, "seed", Some(seed), 0, u64::MAX)?
+        .ok_or_else(|| invalid_argument(py, "seed", "None", "must be an integer >= 0"))?;
+    opts.density = finite(py, "density", density)?;
+    if let Some(b) = bounds.filter(|b| !b.is_none()) {
+        opts.bounds = bounds_arg(py, b)?;
+    }
+    opts.min_start_target_distance =
+        finite(py, "min_start_target_distance", min_start_target_distance)?;
+    opts.require_arm_reachable = require_arm_reachable;
+    opts.template = template.to_string();
+    if let Some(m) = uint_arg(py, "max_attempts", max_attempts, 1, u32::MAX as u64)? {
+        opts.max_attempts = m as u32;
+    }
+    let s = run(py, || generate(&opts, seed))?;
+    Ok(PyScenario::new(s))
+}

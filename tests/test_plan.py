@@ -1,0 +1,209 @@
+"""``sixaxis_avoid.plan`` (Algorithm 2) and ``sixaxis_avoid.generate_scenario``."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sixaxis_avoid as sa
+
+ROOT = Path(__file__).resolve().parent.parent
+CLI = ROOT / "target" / "release" / "sixaxis"
+WALL_TIME_KEYS = {"wall_time_s", "learning_time_s"}
+
+
+def without_wall_times(value):
+    """The value with every wall-time field dropped, at any depth."""
+    if isinstance(value, dict):
+        return {k: without_wall_times(v) for k, v in value.items() if k not in WALL_TIME_KEYS}
+    if isinstance(value, list):
+        return [without_wall_times(v) for v in value]
+    return value
+
+
+def rpy_matrix(rpy_deg) -> np.ndarray:
+    """R = Rz(rt_z) Ry(rt_y) Rx(rt_x) (eq. 12)."""
+    x, y, z = np.radians(rpy_deg)
+    rx = np.array([[1, 0, 0], [0, math.cos(x), -math.sin(x)], [0, math.sin(x), math.cos(x)]])
+    ry = np.array([[math.cos(y), 0, math.sin(y)], [0, 1, 0], [-math.sin(y), 0, math.cos(y)]])
+    rz = np.array([[math.cos(z), -math.sin(z), 0], [math.sin(z), math.cos(z), 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+@pytest.fixture(scope="module")
+def simple_plan() -> sa.PlanResult:
+    return sa.plan("paper_simple", seed=3)
+
+
+@pytest.fixture(scope="module")
+def clutter_plan() -> sa.PlanResult:
+    return sa.plan("replan_clutter", seed=0)
+
+
+def test_plan_paper_simple_succeeds_without_replans(simple_plan):
+    r = simple_plan
+    assert isinstance(r, sa.PlanResult)
+    assert r.success and r.failure is None
+    assert r.replans == 0 and r.added_obstacles == []
+    assert r.path[0] == (0, -2, 4) and r.path[-1] == (0, 3, 0)
+    assert r.poses_rad.shape == (len(r.path), 6)
+    assert r.orientations_rpy_deg.shape == (len(r.path), 3)
+    assert r.seed == 3
+    assert r.cell_mm == 100.0
+    assert r.arm_safe_distance == pytest.approx(0.76)
+    assert r.interpolation_steps == 50
+    assert r.obstacles == sa.Scenario("paper_simple").obstacles
+    assert r.clearance_model == {"kind": "centres"}
+    assert len(r.rounds) == 1 and r.rounds[0]["blocked_at"] is None
+    assert r.rounds[0]["path"] == [list(c) for c in r.path]
+    assert r.wall_time_s > 0
+    assert "success=True" in repr(r)
+
+
+def test_to_dict_equals_cli_json(simple_plan):
+    if not CLI.exists():
+        pytest.skip(f"{CLI} not built (cargo build --release -p sixaxis-cli)")
+    out = subprocess.run(
+        [str(CLI), "plan", "--scenario", "paper_simple", "--seed", "3", "-q"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    cli = json.loads(out)
+    ours = simple_plan.to_dict()
+    assert set(ours) == set(cli)
+    assert without_wall_times(ours) == without_wall_times(cli)
+    assert json.loads(simple_plan.to_json()) == ours
+
+
+def test_plan_replan_clutter_needs_a_replan(clutter_plan):
+    r = clutter_plan
+    assert r.success, r.failure
+    assert r.replans >= 1
+    assert len(r.added_obstacles) == r.replans
+    assert len(r.rounds) == r.replans + 1
+    assert all(rd["blocked_at"] is not None for rd in r.rounds[:-1])
+    for cell in r.added_obstacles:
+        assert cell not in r.path
+
+
+@pytest.mark.parametrize("which", ["simple_plan", "clutter_plan"])
+def test_poses_reproduce_path_cells(which, request):
+    r = request.getfixturevalue(which)
+    arm = sa.Arm.from_scenario(
+        sa.Scenario("paper_simple" if which == "simple_plan" else "replan_clutter")
+    )
+    # The start pose is the scenario's beta_0 (Table 1, printed to 4 decimals): the SPEC
+    # puts its terminal within 0.1 mm of the start cell.
+    start_pos, _ = arm.fk(r.poses_rad[0])
+    np.testing.assert_allclose(start_pos, np.array(r.path[0]) * r.cell_mm, atol=0.1)
+    for cell, q, rpy in zip(r.path[1:], r.poses_rad[1:], r.orientations_rpy_deg[1:]):
+        pos, rot = arm.fk(q)
+        np.testing.assert_allclose(pos, np.array(cell) * r.cell_mm, atol=1e-6, rtol=0)
+        np.testing.assert_allclose(rot, rpy_matrix(rpy), atol=1e-9)
+
+
+def test_plan_is_deterministic_and_assist_switches(simple_plan):
+    again = sa.plan("paper_simple", seed=3)
+    assert without_wall_times(again.to_dict()) == without_wall_times(simple_plan.to_dict())
+    off = sa.plan("paper_simple", seed=3, assist=False)
+    learned = sa.train("paper_simple", seed=3, assist=False)
+    assert off.rounds[0]["path"] == [list(c) for c in learned.path]
+    assert off.rounds[0]["total_steps"] == learned.total_steps
+
+
+def test_plan_episodes_and_max_replans(clutter_plan):
+    few = sa.plan("paper_simple", seed=0, episodes=50)
+    assert few.rounds[0]["total_steps"] == sa.train("paper_simple", seed=0, episodes=50).total_steps
+    capped = sa.plan("replan_clutter", seed=0, max_replans=0)
+    assert not capped.success
+    assert "re-plan cap (0)" in capped.failure
+    assert capped.added_obstacles == clutter_plan.added_obstacles[:1]
+    assert capped.poses_rad.shape == (0, 6)
+
+
+@pytest.mark.parametrize("seed", [0, 3, 11])
+def test_generate_scenario_deterministic_connected_reachable(seed):
+    s = sa.generate_scenario(seed)
+    assert s == sa.generate_scenario(seed)
+    assert s == sa.Scenario.load(f"generated:{seed}")
+    assert s.name == f"generated:{seed}"
+    assert s.start != s.target and s.start not in s.obstacles and s.target not in s.obstacles
+    assert math.dist(s.start, s.target) >= 4.0
+    path = sa.shortest_path(s)
+    assert path is not None and path[0] == s.start and path[-1] == s.target
+    planner = sa.PosePlanner(s)
+    assert planner.cell_reachable(s.start) and planner.cell_reachable(s.target)
+    # beta_0 is a pose at the start cell.
+    pos, _ = sa.Arm.from_scenario(s).fk(np.radians(s.beta0_deg))
+    np.testing.assert_allclose(pos, np.array(s.start) * s.cell_mm, atol=1e-6)
+
+
+def test_generate_scenario_options():
+    a, b = sa.generate_scenario(1), sa.generate_scenario(2)
+    assert a != b
+    box = ((-2, -2, -1), (2, 3, 3))
+    s = sa.generate_scenario(5, density=0.2, bounds=box, min_start_target_distance=3.0)
+    assert s.bounds == box
+    assert s == sa.generate_scenario(
+        5, density=0.2, bounds={"min": box[0], "max": box[1]}, min_start_target_distance=3.0
+    )
+    n_cells = 5 * 6 * 5
+    assert len(s.obstacles) == round(0.2 * n_cells)
+    empty = sa.generate_scenario(4, density=0.0, require_arm_reachable=False)
+    assert empty.obstacles == []
+    assert sa.generate_scenario(4, template="paper_complex").terminal_safe_distance == 0.95
+
+
+BAD_PLAN = [
+    ({"seed": -1}, "seed", "-1"),
+    ({"seed": "x"}, "seed", "'x'"),
+    ({"seed": True}, "seed", "True"),
+    ({"episodes": 0}, "episodes", "0"),
+    ({"episodes": 2**40}, "episodes", str(2**40)),
+    ({"max_replans": -2}, "max_replans", "-2"),
+]
+
+
+@pytest.mark.parametrize(("kwargs", "name", "value"), BAD_PLAN)
+def test_plan_bad_keywords(kwargs, name, value):
+    with pytest.raises(sa.InvalidArgumentError) as info:
+        sa.plan("paper_simple", **kwargs)
+    assert info.value.name == name
+    assert info.value.value == value
+    assert name in str(info.value) and value in str(info.value)
+
+
+BAD_GENERATE = [
+    ({"density": 0.9}, "density", "0.9"),
+    ({"density": math.nan}, "density", "NaN"),
+    ({"min_start_target_distance": 0.5}, "min_start_target_distance", "0.5"),
+    ({"bounds": (1, 2)}, "bounds", "1"),
+    ({"bounds": ((0, 0, 0),)}, "bounds", "((0, 0, 0),)"),
+    ({"bounds": ((0, 0, 0), (-1, 0, 0))}, "bounds", "[0, 0, 0]..[-1, 0, 0]"),
+    ({"max_attempts": 0}, "max_attempts", "0"),
+]
+
+
+@pytest.mark.parametrize(("kwargs", "name", "value"), BAD_GENERATE)
+def test_generate_scenario_bad_keywords(kwargs, name, value):
+    with pytest.raises(sa.InvalidArgumentError) as info:
+        sa.generate_scenario(1, **kwargs)
+    assert info.value.name == name
+    assert info.value.value == value
+
+
+def test_generate_scenario_bad_seed_and_template():
+    with pytest.raises(sa.InvalidArgumentError, match="seed"):
+        sa.generate_scenario(-3)
+    with pytest.raises(sa.ScenarioNotFoundError, match="nope"):
+        sa.generate_scenario(1, template="nope")
+    # No room for the distance asked for: a clear error naming the seed, not a hang.
+    with pytest.raises(sa.InvalidArgumentError, match="seed"):
+        sa.generate_scenario(
+            1, bounds=((0, 0, 0), (1, 1, 1)), min_start_target_distance=5.0, max_attempts=5
+        )
