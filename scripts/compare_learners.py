@@ -453,12 +453,7 @@ def run_native(name: str, seed: int, assist: bool, args: argparse.Namespace) -> 
             "env_steps": int(cum[conv]),
             "wall_time_s": prefix_time(int(conv) + 1),
         },
-        "algorithm1": None
-        if alg1 is None
-        else {
-            "complete": bool(alg1["complete"]),
-            "blocked_cell": None if alg1["blocked_cell"] is None else list(alg1["blocked_cell"]),
-        },
+        "algorithm1": algorithm1_json(alg1),
         "algorithm2": {
             "how": "sixaxis_avoid.plan (core Algorithm 2; each round re-learns from scratch)",
             "success": plan.success,
@@ -469,6 +464,17 @@ def run_native(name: str, seed: int, assist: bool, args: argparse.Namespace) -> 
             "learning_steps": int(sum(rd["total_steps"] for rd in plan.rounds)),
         },
         "curve": downsample_curve(cum, steps),
+    }
+
+
+def algorithm1_json(alg1: dict[str, Any] | None) -> dict[str, Any] | None:
+    """Algorithm 1's verdict on a learner's first path, for the JSON (None: no path)."""
+    if alg1 is None:
+        return None
+    blocked = alg1["blocked_cell"]
+    return {
+        "complete": bool(alg1["complete"]),
+        "blocked_cell": None if blocked is None else list(blocked),
     }
 
 
@@ -496,12 +502,7 @@ def run_bfs(name: str, args: argparse.Namespace) -> dict[str, Any]:
         "wall_time_s": wall,
         "first_success": {"episode": 0, "env_steps": 0, "wall_time_s": wall},
         "convergence": {"episode": 0, "env_steps": 0, "wall_time_s": wall},
-        "algorithm1": None
-        if alg1 is None
-        else {
-            "complete": bool(alg1["complete"]),
-            "blocked_cell": None if alg1["blocked_cell"] is None else list(alg1["blocked_cell"]),
-        },
+        "algorithm1": algorithm1_json(alg1),
         "algorithm2": {
             "how": "replan_loop with the BFS path as learner",
             "success": loop["success"],
@@ -691,12 +692,7 @@ def run_dqn(name: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
         "wall_time_s": first["wall"],
         "first_success": tr.first,
         "convergence": conv,
-        "algorithm1": None
-        if alg1 is None
-        else {
-            "complete": bool(alg1["complete"]),
-            "blocked_cell": None if alg1["blocked_cell"] is None else list(alg1["blocked_cell"]),
-        },
+        "algorithm1": algorithm1_json(alg1),
         "algorithm2": {
             "how": f"replan_loop, DQN retrained from scratch per re-plan, cap {cap}",
             "success": loop["success"],
