@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -22,3 +24,18 @@ def near_target(paper_simple) -> sixaxis_avoid.Scenario:
     return paper_simple.replace(
         name="near_target", target=(0, -2, 3), learning={"max_steps_per_episode": 12}
     )
+
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session")
+def sixaxis_bin() -> Path:
+    """The release `sixaxis` binary; built here if scripts/setup.sh has not built it yet."""
+    path = Path(os.environ.get("SIXAXIS_BIN", ROOT / "target" / "release" / "sixaxis"))
+    if not path.exists():
+        subprocess.run(
+            ["cargo", "build", "--release", "-q", "-p", "sixaxis-cli"], cwd=ROOT, check=True
+        )
+    assert path.exists(), f"no sixaxis binary at {path}"
+    return path

@@ -4,27 +4,11 @@ the same learned path, steps per episode and Q-table (bit for bit)."""
 from __future__ import annotations
 
 import json
-import os
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
 import sixaxis_avoid as sa
-
-ROOT = Path(__file__).resolve().parent.parent
-
-
-@pytest.fixture(scope="module")
-def sixaxis_bin() -> Path:
-    """The release binary; built here if scripts/setup.sh has not built it yet."""
-    path = Path(os.environ.get("SIXAXIS_BIN", ROOT / "target" / "release" / "sixaxis"))
-    if not path.exists():
-        subprocess.run(
-            ["cargo", "build", "--release", "-q", "-p", "sixaxis-cli"], cwd=ROOT, check=True
-        )
-    assert path.exists(), f"no sixaxis binary at {path}"
-    return path
 
 
 @pytest.mark.parametrize(

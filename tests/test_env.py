@@ -231,8 +231,6 @@ def test_scenario_keyword_forms(paper_simple, tmp_path):
 
 
 def test_arm_aware_blocks_cells_no_clear_pose_reaches(paper_simple):
-    if not hasattr(sa._core, "unreachable_cells"):
-        pytest.skip("no pose planner in this build")
     unreachable = sa.unreachable_cells(paper_simple)
     blocked = set(paper_simple.obstacles) | set(unreachable)
     lo, hi = paper_simple.bounds

@@ -5,14 +5,11 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
 import sixaxis_avoid as sa
 
-ROOT = Path(__file__).resolve().parent.parent
-CLI = ROOT / "target" / "release" / "sixaxis"
 WALL_TIME_KEYS = {"wall_time_s", "learning_time_s"}
 
 
@@ -64,11 +61,9 @@ def test_plan_paper_simple_succeeds_without_replans(simple_plan):
     assert "success=True" in repr(r)
 
 
-def test_to_dict_equals_cli_json(simple_plan):
-    if not CLI.exists():
-        pytest.skip(f"{CLI} not built (cargo build --release -p sixaxis-cli)")
+def test_to_dict_equals_cli_json(simple_plan, sixaxis_bin):
     out = subprocess.run(
-        [str(CLI), "plan", "--scenario", "paper_simple", "--seed", "3", "-q"],
+        [str(sixaxis_bin), "plan", "--scenario", "paper_simple", "--seed", "3", "-q"],
         capture_output=True,
         text=True,
         check=True,

@@ -76,8 +76,6 @@ def test_custom_dh():
 
 def test_ik_round_trip():
     arm = sa.Arm()
-    if not hasattr(arm, "ik"):
-        pytest.skip("no inverse kinematics in this build")
     q = np.radians([57.9948, -10.1070, -132.9377, 53.0502, 90.0002, 32.0054])
     pos, rot = arm.fk(q)
     sols = arm.ik(pos, rotation=rot)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-import sixaxis_avoid as sa
 from gymnasium.vector import AutoresetMode
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
@@ -148,22 +147,19 @@ def test_action_dtypes_accepted(near_target):
     env.step([1] * N)
 
 
-def test_native_vector_env_releases_gil_and_is_fast():
+def test_native_vector_env_long_batch_stays_in_bounds():
+    # Speed is measured by scripts/bench_env.py (docs/PERFORMANCE.md), not asserted here.
     env = gym.make_vec("SixAxisAvoid-v0", num_envs=256, copy=False)
-    env.reset(seed=0)
+    obs, _ = env.reset(seed=0)
     actions = np.random.default_rng(0).integers(0, 6, size=(50, 256))
-    import time
-
-    t = time.perf_counter()
     for a in actions:
-        env.step(a)
-    dt = time.perf_counter() - t
-    assert dt < 2.0  # very loose: debug builds are ~30x slower than release
+        obs, rew, term, trunc, _ = env.step(a)
+        assert obs.shape == (256, 13) and np.isfinite(rew).all()
+        assert env.single_observation_space.contains(obs[0])
+        assert not (term & trunc).any()
 
 
 def test_arm_id_vector(paper_simple):
-    if not hasattr(sa._core, "unreachable_cells"):
-        pytest.skip("no pose planner in this build")
     env = gym.make_vec("SixAxisAvoidArm-v0", num_envs=2)
     env.reset(seed=0)
     env.step(np.array([0, 1]))
