@@ -257,6 +257,24 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
+# The keys of dqn_hyperparameters() that go to DQN(...) as they are.
+DQN_CONSTRUCTOR_KEYS = (
+    "learning_rate",
+    "batch_size",
+    "buffer_size",
+    "learning_starts",
+    "gamma",
+    "target_update_interval",
+    "train_freq",
+    "gradient_steps",
+    "exploration_fraction",
+    "exploration_final_eps",
+    "tau",
+    "exploration_initial_eps",
+    "max_grad_norm",
+)
+
+
 def dqn_hyperparameters(args: argparse.Namespace) -> dict[str, Any]:
     return {
         "policy": "MlpPolicy",
@@ -610,21 +628,9 @@ def train_dqn(scenario: Any, seed: int, args: argparse.Namespace, track: bool) -
             return True
 
     model = DQN(
-        "MlpPolicy",
+        hp["policy"],
         env,
-        learning_rate=hp["learning_rate"],
-        batch_size=hp["batch_size"],
-        buffer_size=hp["buffer_size"],
-        learning_starts=hp["learning_starts"],
-        gamma=hp["gamma"],
-        target_update_interval=hp["target_update_interval"],
-        train_freq=hp["train_freq"],
-        gradient_steps=hp["gradient_steps"],
-        exploration_fraction=hp["exploration_fraction"],
-        exploration_final_eps=hp["exploration_final_eps"],
-        tau=hp["tau"],
-        exploration_initial_eps=hp["exploration_initial_eps"],
-        max_grad_norm=hp["max_grad_norm"],
+        **{k: hp[k] for k in DQN_CONSTRUCTOR_KEYS},
         policy_kwargs={"net_arch": hp["net_arch"]},
         seed=seed,
         device="cpu",

@@ -39,6 +39,25 @@ def goal_observation_space() -> spaces.Dict:
     )
 
 
+def check_random_target(obs_type: str, random_target: bool) -> None:
+    """A per-episode target needs an observation that shows the target."""
+    if random_target and obs_type == "index":
+        raise invalid(
+            "random_target",
+            random_target,
+            'needs obs_type "vector" or "goal" (the "index" observation does not show the target)',
+        )
+
+
+def observation_space_of(obs_type: str, num_states: int) -> spaces.Space:
+    """The (single-env) observation space of an obs_type."""
+    if obs_type == "vector":
+        return vector_observation_space()
+    if obs_type == "index":
+        return spaces.Discrete(num_states)
+    return goal_observation_space()
+
+
 class SixAxisAvoidEnv(gym.Env):
     """The terminal (end effector) of a six-axis arm moves on a 3D grid of 100 mm cells and
     must reach a target through clutter, after *Path Planning with Autonomous Obstacle
@@ -170,13 +189,7 @@ class SixAxisAvoidEnv(gym.Env):
             or not 64 <= render_size <= 4096
         ):
             raise invalid("render_size", render_size, "must be an integer in 64..=4096")
-        if random_target and obs_type == "index":
-            raise invalid(
-                "random_target",
-                random_target,
-                'needs obs_type "vector" or "goal" '
-                '(the "index" observation does not show the target)',
-            )
+        check_random_target(obs_type, random_target)
 
         self.scenario: _core.Scenario = as_scenario(scenario)
         self.obs_type = obs_type
@@ -201,12 +214,7 @@ class SixAxisAvoidEnv(gym.Env):
         self._seeded = False
 
         self.action_space = spaces.Discrete(6)
-        if obs_type == "vector":
-            self.observation_space = vector_observation_space()
-        elif obs_type == "index":
-            self.observation_space = spaces.Discrete(self._core.num_states)
-        else:
-            self.observation_space = goal_observation_space()
+        self.observation_space = observation_space_of(obs_type, self._core.num_states)
 
         lo, hi = self.scenario.bounds
         self._lo = np.asarray(lo, dtype=np.float64)

@@ -20,7 +20,7 @@ from sixaxis_avoid._checks import (
     check_positive_int,
     invalid,
 )
-from sixaxis_avoid.env import as_scenario, goal_observation_space, vector_observation_space
+from sixaxis_avoid.env import as_scenario, check_random_target, observation_space_of
 
 
 class SixAxisAvoidVectorEnv(VectorEnv):
@@ -79,13 +79,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
                 render_mode,
                 'the native vector env does not render; use vectorization_mode="sync" to render',
             )
-        if random_target and obs_type == "index":
-            raise invalid(
-                "random_target",
-                random_target,
-                'needs obs_type "vector" or "goal" '
-                '(the "index" observation does not show the target)',
-            )
+        check_random_target(obs_type, random_target)
         self.scenario = as_scenario(scenario)
         if max_episode_steps is None:
             max_episode_steps = self.scenario.max_steps_per_episode
@@ -106,12 +100,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             random_target=random_target,
             extra_obstacles=extra,
         )
-        if obs_type == "vector":
-            self.single_observation_space = vector_observation_space()
-        elif obs_type == "index":
-            self.single_observation_space = spaces.Discrete(self._core.num_states)
-        else:
-            self.single_observation_space = goal_observation_space()
+        self.single_observation_space = observation_space_of(obs_type, self._core.num_states)
         self.single_action_space = spaces.Discrete(6)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
