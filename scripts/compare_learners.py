@@ -10,9 +10,10 @@ beside the figures, every file is written atomically. Learners, per scenario and
 
 For each learned path the whole arm is checked: Algorithm 1 (``PosePlanner.plan_poses``) on
 the first learned path, and Algorithm 2 (re-planning around points no safe pose reaches):
-``sixaxis_avoid.plan`` for the Q-learners, the same loop in Python (``replan_loop``) for the
-breadth-first path and for DQN (which is retrained from scratch per re-plan, capped by
-``--dqn-max-replans``, 0 by default: DQN then gets Algorithm 1's verdict only).
+``sixaxis_avoid.plan`` (the core's loop) for every learner: ``learner="bfs"`` for the
+breadth-first path, and a Python learner for DQN (which is retrained from scratch per
+re-plan, capped by ``--dqn-max-replans``, 0 by default: DQN then gets Algorithm 1's verdict
+only).
 
     python scripts/compare_learners.py                 # the full comparison (~10 min, 2 cores)
     python scripts/compare_learners.py --quick         # a few seconds, for CI
@@ -39,7 +40,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -362,61 +363,6 @@ def downsample_curve(x: np.ndarray, y: np.ndarray, points: int = 200) -> dict[st
 
 
 # --------------------------------------------------------------------------------------
-# Algorithm 2 with any path learner (the core's loop, for the BFS path and DQN)
-
-
-def replan_loop(
-    scenario: Any,
-    learn: Callable[[list[tuple[int, int, int]]], list | None],
-    max_replans: int,
-) -> dict[str, Any]:
-    """The re-planning loop of ``sixaxis_core::replanning::plan`` with ``learn(added)`` as
-    the path learner: learn a path on the scenario plus the points added so far, run
-    Algorithm 1 from beta_0 with the scenario's own obstacles, add the blocked point (the
-    point before it when the target itself is blocked) and learn again. The tests check it
-    against ``sixaxis_avoid.plan`` with the native learner."""
-    import sixaxis_avoid as sa
-
-    planner = sa.PosePlanner(scenario)
-    start, target = tuple(scenario.start), tuple(scenario.target)
-    added: list[tuple[int, int, int]] = []
-    rounds: list[dict[str, Any]] = []
-    path: list | None = None
-
-    def done(failure: str | None) -> dict[str, Any]:
-        return {
-            "success": failure is None,
-            "replans": max(len(rounds) - 1, 0),
-            "added_obstacles": [list(c) for c in added],
-            "path": cells(path),
-            "failure": failure,
-            "rounds": rounds,
-        }
-
-    round_ = 0
-    while True:
-        if sa.shortest_path(scenario, extra_obstacles=added) is None:
-            return done("the target is cut off by the points no arm pose reaches")
-        path = learn(list(added))
-        if path is None:
-            rounds.append({"path": None, "blocked_at": None})
-            return done(f"the learned path does not reach the target (round {round_})")
-        res = planner.plan_poses(path)
-        if res["complete"]:
-            rounds.append({"path": cells(path), "blocked_at": None})
-            return done(None)
-        index, cell = int(res["blocked_index"]), tuple(int(v) for v in res["blocked_cell"])
-        rounds.append({"path": cells(path), "blocked_at": [index, list(cell)]})
-        recorded = tuple(path[index - 1]) if cell == target else cell
-        if recorded == start:
-            return done("no clear arm motion reaches the target from the start pose")
-        added.append(recorded)
-        if round_ >= max_replans:
-            return done(f"re-plan cap ({max_replans}) reached")
-        round_ += 1
-
-
-# --------------------------------------------------------------------------------------
 # Native Q-learners and the BFS optimum
 
 
@@ -504,12 +450,7 @@ def run_bfs(name: str, args: argparse.Namespace) -> dict[str, Any]:
     path = sa.shortest_path(scenario)
     wall = time.perf_counter() - t0
     alg1 = sa.PosePlanner(scenario).plan_poses(path) if path is not None else None
-    cap = scenario_max_replans(scenario, args)
-    t0 = time.perf_counter()
-    loop = replan_loop(
-        scenario, lambda added: sa.shortest_path(scenario, extra_obstacles=added), cap
-    )
-    loop_wall = time.perf_counter() - t0
+    loop = sa.plan(scenario, learner="bfs", max_replans=args.max_replans)
     return {
         "success": path is not None,
         "path": cells(path),
@@ -522,12 +463,12 @@ def run_bfs(name: str, args: argparse.Namespace) -> dict[str, Any]:
         "convergence": {"episode": 0, "env_steps": 0, "wall_time_s": wall},
         "algorithm1": algorithm1_json(alg1),
         "algorithm2": {
-            "how": "replan_loop with the BFS path as learner",
-            "success": loop["success"],
-            "replans": loop["replans"],
-            "added_obstacles": loop["added_obstacles"],
-            "failure": loop["failure"],
-            "wall_time_s": loop_wall,
+            "how": 'sixaxis_avoid.plan(learner="bfs") (core Algorithm 2)',
+            "success": loop.success,
+            "replans": loop.replans,
+            "added_obstacles": [list(c) for c in loop.added_obstacles],
+            "failure": loop.failure,
+            "wall_time_s": loop.wall_time_s,
             "learning_steps": 0,
         },
         "curve": {"env_steps": [], "episode_length": []},
@@ -674,18 +615,17 @@ def run_dqn(name: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
 
     rounds_steps = [first["steps"]]
 
-    def learn(added: list) -> list | None:
-        if not added:
+    def learn(world: Any, seed: int) -> list | None:
+        """The core loop's path learner: round 0 reuses the first run, later rounds (the
+        scenario plus the points added so far) retrain DQN from scratch."""
+        if len(world.obstacles) == len(scenario.obstacles):
             return path
-        extra = scenario.replace(obstacles=[*scenario.obstacles, *added])
-        again = train_dqn(extra, seed, args, track=False)
+        again = train_dqn(world, seed, args, track=False)
         rounds_steps.append(again["steps"])
         return again["final"]["path"]
 
-    t0 = time.perf_counter()
     cap = min(args.dqn_max_replans, scenario_max_replans(scenario, args))
-    loop = replan_loop(scenario, learn, cap)
-    loop_wall = time.perf_counter() - t0
+    loop = sa.plan(scenario, seed=seed, learner=learn, max_replans=cap)
     ends = np.array([e[0] for e in tr.episodes], dtype=np.int64)
     lens = np.array([e[1] for e in tr.episodes], dtype=np.int64)
     return {
@@ -700,12 +640,12 @@ def run_dqn(name: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
         "convergence": conv,
         "algorithm1": algorithm1_json(alg1),
         "algorithm2": {
-            "how": f"replan_loop, DQN retrained from scratch per re-plan, cap {cap}",
-            "success": loop["success"],
-            "replans": loop["replans"],
-            "added_obstacles": loop["added_obstacles"],
-            "failure": loop["failure"],
-            "wall_time_s": loop_wall,
+            "how": f"sixaxis_avoid.plan with DQN retrained from scratch per re-plan, cap {cap}",
+            "success": loop.success,
+            "replans": loop.replans,
+            "added_obstacles": [list(c) for c in loop.added_obstacles],
+            "failure": loop.failure,
+            "wall_time_s": loop.wall_time_s,
             "learning_steps": int(sum(rounds_steps)),
         },
         "curve": downsample_curve(ends, lens),

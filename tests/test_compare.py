@@ -103,25 +103,6 @@ def test_quick_run_writes_figures_and_report(quick):
     assert not list(out.glob(".*.tmp")), "a temporary file was left behind"
 
 
-def test_replan_loop_matches_core_plan():
-    """The Python loop (used for BFS and DQN) with the native learner is the core's loop."""
-    cmp = load_script()
-    s = sa.Scenario("replan_clutter")
-    for seed in (0, 1):
-        core = sa.plan(s, seed=seed)
-
-        def learn(added, seed=seed):
-            return sa.train(s, seed=seed, extra_obstacles=added).path
-
-        ours = cmp.replan_loop(s, learn, max_replans=20)
-        assert ours["success"] == core.success
-        assert ours["replans"] == core.replans >= 1
-        assert ours["added_obstacles"] == [list(c) for c in core.added_obstacles]
-        assert ours["path"] == [list(c) for c in core.path]
-        capped = cmp.replan_loop(s, learn, max_replans=0)
-        assert not capped["success"] and "cap (0)" in capped["failure"]
-
-
 def test_arguments():
     cmp = load_script()
     assert cmp.expand_names("a, generated:2..4") == [

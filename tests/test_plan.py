@@ -202,3 +202,84 @@ def test_generate_scenario_bad_seed_and_template():
         sa.generate_scenario(
             1, bounds=((0, 0, 0), (1, 1, 1)), min_start_target_distance=5.0, max_attempts=5
         )
+
+
+# --- Algorithm 2 over any path learner: every learner goes through the core's loop ---------
+
+
+def test_plan_with_bfs_learner_runs_the_core_loop():
+    s = sa.Scenario("replan_clutter")
+    r = sa.plan(s, learner="bfs")
+    assert r.success and r.replans >= 1
+    # Each round's path is the breadth-first path of that round's world.
+    for k, rnd in enumerate(r.rounds):
+        added = r.added_obstacles[: rnd["added_obstacles"]]
+        assert rnd["path"] == [list(c) for c in sa.shortest_path(s, extra_obstacles=added)], k
+        assert rnd["total_steps"] == 0 and rnd["converged_episode"] is None
+    assert r.path == sa.shortest_path(s, extra_obstacles=r.added_obstacles)
+    capped = sa.plan(s, learner="bfs", max_replans=0)
+    assert not capped.success and "re-plan cap (0)" in capped.failure
+
+
+def test_plan_with_python_learner_is_called_per_round_by_the_core():
+    s = sa.Scenario("replan_clutter")
+    calls = []
+
+    def learner(world, seed):
+        calls.append((world, seed))
+        return {"path": sa.shortest_path(world), "total_steps": 7}
+
+    r = sa.plan(s, seed=5, learner=learner)
+    bfs = sa.plan(s, learner="bfs")
+    assert r.success and r.path == bfs.path and r.added_obstacles == bfs.added_obstacles
+    assert len(calls) == len(r.rounds) == r.replans + 1 >= 2
+    for k, (world, seed) in enumerate(calls):
+        assert isinstance(world, sa.Scenario) and seed == 5
+        # The round's world: the scenario with every point added so far appended.
+        added = r.added_obstacles[: r.rounds[k]["added_obstacles"]]
+        assert world.obstacles == s.obstacles + added
+        assert (world.start, world.target) == (s.start, s.target)
+    assert all(rnd["total_steps"] == 7 for rnd in r.rounds)
+
+    class Learner:
+        def __init__(self):
+            self.rounds = 0
+
+        def learn_path(self, world, seed):
+            self.rounds += 1
+            return sa.shortest_path(world)
+
+    obj = Learner()
+    assert sa.plan(s, learner=obj).path == bfs.path and obj.rounds == len(calls)
+
+
+def test_plan_python_learner_errors():
+    s = sa.Scenario("paper_simple")
+    good = sa.shortest_path(s)
+
+    class Boom(Exception):
+        pass
+
+    def raises(world, seed):
+        raise Boom("from the learner")
+
+    with pytest.raises(Boom, match="from the learner"):
+        sa.plan(s, learner=raises)
+    jump = [good[0], good[2], *good[3:]]
+    for bad, words in [
+        (good[1:], "must start at the start cell"),
+        (good[:-1], "must end at the target cell"),
+        (jump, "is not a move to one of the six neighbouring cells"),
+        ([s.start, *[(0, 3, 9)], s.target], "out of bounds"),
+    ]:
+        with pytest.raises(sa.InvalidArgumentError, match=words) as info:
+            sa.plan(s, learner=lambda world, seed, bad=bad: bad)
+        assert info.value.name == "path"
+    none = sa.plan(s, learner=lambda world, seed: None)
+    assert not none.success and "returned no path (round 0)" in none.failure
+    with pytest.raises(sa.InvalidArgumentError, match="learner"):
+        sa.plan(s, learner="dqn")
+    with pytest.raises(sa.InvalidArgumentError, match="learner"):
+        sa.plan(s, learner=3)
+    with pytest.raises(sa.InvalidArgumentError, match="must return a list"):
+        sa.plan(s, learner=lambda world, seed: 5)

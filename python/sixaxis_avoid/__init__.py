@@ -10,7 +10,8 @@ Importing the package registers the Gymnasium ids ``SixAxisAvoid-v0`` and
     envs = gym.make_vec("SixAxisAvoid-v0", num_envs=1024)
 
 The core (grid world, Q-learning, kinematics) is Rust, in the extension ``sixaxis_avoid._core``.
-Every error is a :class:`SixAxisError`, itself a ``ValueError``.
+Every error of bad input is a :class:`SixAxisError`, itself a ``ValueError``; a caught Rust
+panic is :class:`InternalError`, a ``RuntimeError``.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 from collections.abc import Callable, Iterable, Sequence
 from os import PathLike
-from typing import Any
+from typing import Any, Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -35,7 +35,7 @@ class InvalidArgumentError(SixAxisError):
 
 class QTableMismatchError(SixAxisError): ...
 class SixAxisIOError(OSError, SixAxisError): ...
-class InternalError(SixAxisError, RuntimeError): ...
+class InternalError(RuntimeError): ...
 
 class Scenario:
     def __init__(
@@ -123,6 +123,8 @@ class TrainResult:
     @property
     def converged_episode(self) -> int | None: ...
     @property
+    def length_converged_episode(self) -> int | None: ...
+    @property
     def total_steps(self) -> int: ...
     @property
     def wall_time_s(self) -> float: ...
@@ -145,6 +147,8 @@ def train(
     episodes: int | None = None,
     seed: int | None = None,
     assist: bool | None = None,
+    detour: bool | None = None,
+    distance: bool | None = None,
     max_steps_per_episode: int | None = None,
     extra_obstacles: Iterable[CellLike] | None = None,
     initial_q: npt.NDArray[np.float64] | None = None,
@@ -286,12 +290,28 @@ class PlanResult:
     def to_dict(self) -> dict[str, Any]: ...
     def to_json(self) -> str: ...
 
+class PathLearnerObject(Protocol):
+    def learn_path(
+        self, scenario: Scenario, seed: int
+    ) -> Sequence[CellLike] | dict[str, Any] | None: ...
+
+PathLearner = (
+    Literal["qlearning", "bfs"]
+    | Callable[[Scenario, int], Sequence[CellLike] | dict[str, Any] | None]
+    | PathLearnerObject
+)
+
 def plan(
     scenario: ScenarioLike = None,
+    *,
     seed: int | None = None,
     episodes: int | None = None,
-    assist: bool | None = True,
+    assist: bool | None = None,
+    detour: bool | None = None,
+    distance: bool | None = None,
+    max_steps_per_episode: int | None = None,
     max_replans: int | None = None,
+    learner: PathLearner | None = None,
 ) -> PlanResult: ...
 def generate_scenario(
     seed: int,

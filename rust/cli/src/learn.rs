@@ -4,65 +4,81 @@ use std::path::PathBuf;
 
 use clap::Args;
 use serde_json::{json, Value};
-use sixaxis_core::grid::{Assist, GridWorld};
+use sixaxis_core::grid::GridWorld;
 use sixaxis_core::qlearning::{train, QTable, TrainOptions, TrainResult};
-use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};
+use sixaxis_core::replanning::{plan, BfsLearner, PlanResult};
+use sixaxis_core::request::{
+    parse_int, LearnerKind, PlanRequest, TrainRequest, EPISODES, MAX_REPLANS, MAX_STEPS, SEED,
+};
 use sixaxis_core::Scenario;
 
 use crate::progress;
 use crate::Failure;
 
-/// Learning options shared by `train` and `plan`.
+/// Learning options shared by `train` and `plan`. Integers are taken as text and checked by
+/// the core's request layer, so a bad value gets the same error as from Python.
 #[derive(Args, Debug, Clone)]
 pub struct LearnArgs {
     /// Scenario file or built-in name (paper_simple, paper_complex, replan_clutter).
     #[arg(long, value_name = "NAME_OR_FILE", default_value = "paper_simple")]
     pub scenario: String,
     /// Seed of the learner's random generator (default: the scenario's `learning.seed`).
-    #[arg(long)]
-    pub seed: Option<u64>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub seed: Option<String>,
     /// Learning episodes (default: the scenario's `learning.episodes`, the paper's 10000).
-    #[arg(long)]
-    pub episodes: Option<u32>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub episodes: Option<String>,
+    /// Step cap of an episode (default: the scenario's `learning.max_steps_per_episode`).
+    #[arg(long, allow_hyphen_values = true)]
+    pub max_steps_per_episode: Option<String>,
     /// Turn both assisted strategies off (eq. 5 rewards alone).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "assist")]
     pub no_assist: bool,
+    /// Turn both assisted strategies on (eqs. 9 and 10), whatever the scenario says.
+    #[arg(long)]
+    pub assist: bool,
     /// Turn detour encouraging (eq. 9) off.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "detour")]
     pub no_detour: bool,
-    /// Turn distance assistance (eq. 10) off.
+    /// Turn detour encouraging (eq. 9) on.
     #[arg(long)]
+    pub detour: bool,
+    /// Turn distance assistance (eq. 10) off.
+    #[arg(long, conflicts_with = "distance")]
     pub no_distance: bool,
+    /// Turn distance assistance (eq. 10) on.
+    #[arg(long)]
+    pub distance: bool,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
 }
 
+/// `Some(true)` for `--on`, `Some(false)` for `--no-on`, `None` for neither.
+fn switch(on: bool, off: bool) -> Option<bool> {
+    (on || off).then_some(on)
+}
+
 impl LearnArgs {
+    /// The training request these flags make (nothing resolved yet).
+    pub fn request(&self) -> Result<TrainRequest, Failure> {
+        let int = |domain, text: &Option<String>| -> Result<Option<i128>, Failure> {
+            Ok(text.as_deref().map(|t| parse_int(domain, t)).transpose()?)
+        };
+        Ok(TrainRequest {
+            episodes: int(EPISODES, &self.episodes)?,
+            seed: int(SEED, &self.seed)?,
+            assist: switch(self.assist, self.no_assist),
+            detour: switch(self.detour, self.no_detour),
+            distance: switch(self.distance, self.no_distance),
+            max_steps_per_episode: int(MAX_STEPS, &self.max_steps_per_episode)?,
+        })
+    }
+
     /// The scenario and the learning options these flags ask for.
     pub fn resolve(&self) -> Result<(Scenario, TrainOptions), Failure> {
         let s = Scenario::load(&self.scenario)?;
-        let mut opts = TrainOptions::from_scenario(&s);
-        if let Some(seed) = self.seed {
-            opts.seed = seed;
-        }
-        if let Some(n) = self.episodes {
-            if n == 0 {
-                return Err(sixaxis_core::Error::argument("--episodes", 0, "must be > 0").into());
-            }
-            opts.episodes = n;
-        }
-        let mut assist: Assist = opts.assist;
-        if self.no_assist {
-            assist = Assist::off();
-        }
-        if self.no_detour {
-            assist.detour = false;
-        }
-        if self.no_distance {
-            assist.distance = false;
-        }
-        opts.assist = assist;
+        let opts = self.request()?.resolve(&s)?;
         Ok((s, opts))
     }
 }
@@ -102,6 +118,7 @@ pub fn train_json(
         "path_length": r.path.as_ref().map(|p| p.len() - 1),
         "shortest_path_length": shortest,
         "converged_episode": r.converged_episode,
+        "length_converged_episode": r.length_converged_episode,
         "total_steps": r.total_steps,
         "wall_time_s": r.wall_time_s,
         "steps_per_second": if r.wall_time_s > 0.0 { r.total_steps as f64 / r.wall_time_s } else { 0.0 },
@@ -136,24 +153,35 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub learn: LearnArgs,
     /// Re-plans allowed before giving up (default: the scenario's `planning.max_replans`).
-    #[arg(long)]
-    pub max_replans: Option<u32>,
+    #[arg(long, allow_hyphen_values = true)]
+    pub max_replans: Option<String>,
+    /// The path learner of every round: qlearning (the paper's, default) or bfs.
+    #[arg(long, value_name = "NAME")]
+    pub learner: Option<String>,
 }
 
 /// `sixaxis plan`: Algorithm 2.
 pub fn run_plan(a: &PlanArgs) -> Result<PlanResult, Failure> {
-    let (s, train) = a.learn.resolve()?;
-    let mut opts = PlanOptions::from_scenario(&s);
-    opts.train = train;
-    if let Some(m) = a.max_replans {
-        opts.max_replans = m;
-    }
+    let s = Scenario::load(&a.learn.scenario)?;
+    let req = PlanRequest {
+        train: a.learn.request()?,
+        max_replans: a
+            .max_replans
+            .as_deref()
+            .map(|t| parse_int(MAX_REPLANS, t))
+            .transpose()?,
+        learner: a.learner.clone(),
+    };
+    let (opts, learner) = req.resolve(&s)?;
     let pb = progress::bar(opts.train.episodes as u64, "round 0", a.learn.quiet);
     let tick = |round: u32, done: u32| {
         pb.set_prefix(format!("round {round}"));
         pb.set_position(done as u64);
     };
-    let r = plan(&s, &opts, Some(&tick))?;
+    let r = match learner {
+        LearnerKind::Qlearning => plan(&s, &opts, None, Some(&tick))?,
+        LearnerKind::Bfs => plan(&s, &opts, Some(&mut BfsLearner), Some(&tick))?,
+    };
     pb.finish_and_clear();
     Ok(r)
 }

@@ -207,12 +207,12 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
             if let Some(n) = a.episodes {
                 opts.train.episodes = n;
             }
-            let r = plan(s, &opts, None)?;
+            let r = plan(s, &opts, None, None)?;
             let mut entry = plan_json(s, &r, seed == 0);
             // The paper's Algorithm 1 as written: the greedy pass, no backtracking.
             let mut greedy_scenario = s.clone();
             greedy_scenario.planning.backtrack_budget = 0;
-            let g = plan(&greedy_scenario, &opts, None)?;
+            let g = plan(&greedy_scenario, &opts, None, None)?;
             entry["greedy"] = plan_json(s, &g, false);
             plans.push(entry);
             pb.inc(1);

@@ -17,7 +17,7 @@ fn bench_algorithm2(c: &mut Criterion) {
     for name in ["paper_simple", "paper_complex", "replan_clutter"] {
         let s = Scenario::builtin(name).expect("built-in scenario");
         let opts = PlanOptions::from_scenario(&s);
-        let probe = plan(&s, &opts, None).expect("plan");
+        let probe = plan(&s, &opts, None, None).expect("plan");
         println!(
             "{name}: success {}, {} re-plans, path {} steps",
             probe.success,
@@ -25,7 +25,7 @@ fn bench_algorithm2(c: &mut Criterion) {
             probe.path.len().saturating_sub(1)
         );
         group.bench_function(format!("plan_{name}"), |b| {
-            b.iter(|| plan(black_box(&s), black_box(&opts), None).expect("plan"))
+            b.iter(|| plan(black_box(&s), black_box(&opts), None, None).expect("plan"))
         });
     }
     group.finish();

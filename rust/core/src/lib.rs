@@ -23,7 +23,7 @@
 //! ```
 //! use sixaxis_core::{replanning::{plan, PlanOptions}, Scenario};
 //! let s = Scenario::load("paper_simple").unwrap();
-//! let result = plan(&s, &PlanOptions::from_scenario(&s), None).unwrap();
+//! let result = plan(&s, &PlanOptions::from_scenario(&s), None, None).unwrap();
 //! assert!(result.success, "{:?}", result.failure);
 //! assert_eq!(result.poses_rad.len(), result.path.len());
 //! ```
@@ -41,6 +41,7 @@ pub mod kinematics;
 pub mod planner;
 pub mod qlearning;
 pub mod replanning;
+pub mod request;
 pub mod scenario;
 
 pub use clearance::Clearance;
@@ -50,5 +51,7 @@ pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use planner::{PosePlan, PosePlanner, PosePoint};
 pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
-pub use replanning::{plan, PlanOptions, PlanResult};
+pub use replanning::{
+    plan, BfsLearner, LearnedPath, PathLearner, PlanOptions, PlanResult, QLearner,
+};
 pub use scenario::{Cell, Scenario};

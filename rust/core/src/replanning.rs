@@ -2,9 +2,13 @@
 //! poses along it, and re-plan around every path point no safe pose reaches.
 //!
 //! Entry points:
-//! - [`plan`] — the whole loop for a scenario; returns a [`PlanResult`] (success or a
-//!   clear failure naming the points that could not be reached).
+//! - [`plan`] — the whole loop for a scenario with any [`PathLearner`] (tabular Q-learning,
+//!   [`QLearner`], when none is given); returns a [`PlanResult`] (success or a clear failure
+//!   naming the points that could not be reached).
 //! - [`PlanOptions`] — seed, episodes and assistance, defaulting to the scenario's.
+//! - [`PathLearner`] — what learns the terminal's path in each round: [`QLearner`] (the
+//!   paper's, the default), [`BfsLearner`] (the breadth-first shortest path), or your own.
+//!   Every path a learner returns is checked ([`check_path`]) before Algorithm 1 sees it.
 //!
 //! Each round learns a path from scratch (a fresh Q-table) on the scenario's obstacles plus
 //! every point added so far, then runs Algorithm 1 ([`crate::planner::PosePlanner`]) from
@@ -20,15 +24,24 @@
 //! ```no_run
 //! use sixaxis_core::{replanning::{plan, PlanOptions}, Scenario};
 //! let s = Scenario::load("paper_simple").unwrap();
-//! let result = plan(&s, &PlanOptions::from_scenario(&s), None).unwrap();
+//! let result = plan(&s, &PlanOptions::from_scenario(&s), None, None).unwrap();
 //! assert!(result.success);
+//! ```
+//!
+//! With the breadth-first shortest path as the learner:
+//!
+//! ```no_run
+//! use sixaxis_core::{replanning::{plan, BfsLearner, PlanOptions}, Scenario};
+//! let s = Scenario::load("replan_clutter").unwrap();
+//! let result = plan(&s, &PlanOptions::from_scenario(&s), Some(&mut BfsLearner), None).unwrap();
+//! assert!(result.rounds.iter().all(|r| r.total_steps == 0));
 //! ```
 
 use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::grid::GridWorld;
 use crate::planner::{PosePlan, PosePlanner};
 use crate::qlearning::{train, TrainOptions};
@@ -53,6 +66,144 @@ impl PlanOptions {
     }
 }
 
+/// What a [`PathLearner`] learned in one round of Algorithm 2.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LearnedPath {
+    /// The terminal's path, cells from start to target; `None` if the learner found none.
+    pub path: Option<Vec<Cell>>,
+    /// First episode from which the learned path no longer changed (learners with episodes).
+    pub converged_episode: Option<u32>,
+    /// First episode from which the learned path's length no longer changed.
+    pub length_converged_episode: Option<u32>,
+    /// Environment steps spent learning (0 for a planner such as BFS).
+    pub total_steps: u64,
+    /// Wall time of the learning, seconds.
+    pub wall_time_s: f64,
+}
+
+/// One round of Algorithm 2, as a [`PathLearner`] sees it.
+pub struct Round<'a> {
+    /// Round number, from 0 (re-plan `k` is round `k`).
+    pub index: u32,
+    /// The scenario being planned (its own obstacles only).
+    pub scenario: &'a Scenario,
+    /// Points recorded as obstacles so far (for the terminal), in order.
+    pub added_obstacles: &'a [Cell],
+    /// `progress(episodes_done)` for learners with episodes; `None` when nobody listens.
+    pub progress: Option<&'a dyn Fn(u32)>,
+}
+
+/// What learns the terminal's path in each round of Algorithm 2.
+///
+/// `world` is the round's grid world: the scenario's obstacles plus `round.added_obstacles`.
+/// The returned path is checked by [`check_path`] before it is used; an error ends the run
+/// with that error.
+pub trait PathLearner {
+    /// Learn a path from the world's start to its target.
+    fn learn_path(&mut self, world: &GridWorld, round: &Round<'_>) -> Result<LearnedPath>;
+
+    /// Why the run stops when [`PathLearner::learn_path`] found no path in round `round`.
+    fn no_path_reason(&self, round: u32) -> String {
+        format!("the path learner found no path to the target (round {round})")
+    }
+}
+
+/// The paper's learner: tabular Q-learning ([`crate::qlearning::train`]) from a fresh
+/// Q-table in every round, with the same options (and so the same seed) each round.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QLearner {
+    /// Learning options of every round.
+    pub opts: TrainOptions,
+}
+
+impl PathLearner for QLearner {
+    fn learn_path(&mut self, world: &GridWorld, round: &Round<'_>) -> Result<LearnedPath> {
+        let r = train(world, &self.opts, None, round.progress)?;
+        Ok(LearnedPath {
+            path: r.path,
+            converged_episode: r.converged_episode,
+            length_converged_episode: r.length_converged_episode,
+            total_steps: r.total_steps,
+            wall_time_s: r.wall_time_s,
+        })
+    }
+
+    fn no_path_reason(&self, round: u32) -> String {
+        format!(
+            "the learned greedy path does not reach the target after {} episodes (round {round}, seed {})",
+            self.opts.episodes, self.opts.seed
+        )
+    }
+}
+
+/// The breadth-first shortest path of the round's world ([`GridWorld::shortest_path`]): the
+/// optimal reference, no learning.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BfsLearner;
+
+impl PathLearner for BfsLearner {
+    fn learn_path(&mut self, world: &GridWorld, _round: &Round<'_>) -> Result<LearnedPath> {
+        let t0 = Instant::now();
+        let path = world.shortest_path();
+        Ok(LearnedPath {
+            path,
+            wall_time_s: t0.elapsed().as_secs_f64(),
+            ..LearnedPath::default()
+        })
+    }
+
+    fn no_path_reason(&self, round: u32) -> String {
+        format!("breadth-first search finds no path to the target (round {round})")
+    }
+}
+
+/// Check a learner's path against its world: it starts at the start, ends at the target,
+/// every step moves to one of the six neighbouring cells, and no cell is out of bounds or
+/// blocked. The error ([`Error::InvalidArgument`] named `path`) says which rule is broken where.
+pub fn check_path(world: &GridWorld, path: &[Cell]) -> Result<()> {
+    let bad = |why: String| Err(Error::argument("path", fmt_path(path), why));
+    let (start, target) = (world.cell_of(world.start()), world.cell_of(world.target()));
+    match (path.first(), path.last()) {
+        (None, _) | (_, None) => return bad("the path learner returned an empty path".into()),
+        (Some(&first), _) if first != start => {
+            return bad(format!(
+                "the path must start at the start cell {}, not {}",
+                fmt_cell(start),
+                fmt_cell(first)
+            ))
+        }
+        (_, Some(&last)) if last != target => {
+            return bad(format!(
+                "the path must end at the target cell {}, not {}",
+                fmt_cell(target),
+                fmt_cell(last)
+            ))
+        }
+        _ => {}
+    }
+    for (i, &c) in path.iter().enumerate() {
+        match world.state_of(c) {
+            None => return bad(format!("point {i} {} is out of bounds", fmt_cell(c))),
+            Some(s) if world.is_blocked(s) => {
+                return bad(format!("point {i} {} is an obstacle", fmt_cell(c)))
+            }
+            _ => {}
+        }
+        if i > 0 {
+            let p = path[i - 1];
+            let d: i32 = (0..3).map(|k| (c[k] - p[k]).abs()).sum();
+            if d != 1 {
+                return bad(format!(
+                    "step {i} from {} to {} is not a move to one of the six neighbouring cells",
+                    fmt_cell(p),
+                    fmt_cell(c)
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Learning figures of one round of Algorithm 2.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RoundSummary {
@@ -62,6 +213,8 @@ pub struct RoundSummary {
     pub path: Option<Vec<Cell>>,
     /// First episode from which the greedy path no longer changed.
     pub converged_episode: Option<u32>,
+    /// First episode from which the greedy path's length no longer changed.
+    pub length_converged_episode: Option<u32>,
     /// Environment steps of this round's learning.
     pub total_steps: u64,
     /// Wall time of this round's learning, seconds.
@@ -109,23 +262,50 @@ pub struct PlanResult {
     pub wall_time_s: f64,
 }
 
+fn fmt_cell(c: Cell) -> String {
+    format!("({}, {}, {})", c[0], c[1], c[2])
+}
+
 fn fmt_cells(cells: &[Cell]) -> String {
-    let parts: Vec<String> = cells
-        .iter()
-        .map(|c| format!("({}, {}, {})", c[0], c[1], c[2]))
-        .collect();
+    let parts: Vec<String> = cells.iter().map(|&c| fmt_cell(c)).collect();
     parts.join(", ")
 }
 
-/// Run Algorithm 2 on a scenario. `progress(round, episodes_done)` is called during learning.
+/// A path as `[(x, y, z), ...]`, shortened in the middle when long.
+fn fmt_path(path: &[Cell]) -> String {
+    if path.len() <= 12 {
+        return format!("[{}]", fmt_cells(path));
+    }
+    format!(
+        "[{}, ..., {}] ({} points)",
+        fmt_cells(&path[..5]),
+        fmt_cells(&path[path.len() - 5..]),
+        path.len()
+    )
+}
+
+/// Run Algorithm 2 on a scenario with `learner` (`None`: tabular Q-learning with
+/// `opts.train`, the paper's). `progress(round, episodes_done)` is called during learning.
 ///
-/// Errors only for invalid input; a plan that cannot be completed is `Ok` with
+/// Errors for invalid input, for an error of the learner, and for a learned path that
+/// breaks the rules of [`check_path`]; a plan that cannot be completed is `Ok` with
 /// `success == false` and a `failure` reason.
 pub fn plan(
     scenario: &Scenario,
     opts: &PlanOptions,
+    learner: Option<&mut dyn PathLearner>,
     progress: Option<&dyn Fn(u32, u32)>,
 ) -> Result<PlanResult> {
+    let mut default_learner;
+    let learner: &mut dyn PathLearner = match learner {
+        Some(l) => l,
+        None => {
+            default_learner = QLearner {
+                opts: opts.train.clone(),
+            };
+            &mut default_learner
+        }
+    };
     let t0 = Instant::now();
     let planner = PosePlanner::from_scenario(scenario);
     let beta0 = scenario.arm.beta0_rad();
@@ -166,21 +346,30 @@ pub fn plan(
         }
         let cb = progress.map(|p| move |done: u32| p(round, done));
         let cb_ref: Option<&dyn Fn(u32)> = cb.as_ref().map(|f| f as &dyn Fn(u32));
-        let learned = train(&world, &opts.train, None, cb_ref)?;
+        let learned = learner.learn_path(
+            &world,
+            &Round {
+                index: round,
+                scenario,
+                added_obstacles: &result.added_obstacles,
+                progress: cb_ref,
+            },
+        )?;
+        if let Some(path) = &learned.path {
+            check_path(&world, path)?;
+        }
         let mut summary = RoundSummary {
             added_obstacles: result.added_obstacles.len(),
             path: learned.path.clone(),
             converged_episode: learned.converged_episode,
+            length_converged_episode: learned.length_converged_episode,
             total_steps: learned.total_steps,
             learning_time_s: learned.wall_time_s,
             blocked_at: None,
         };
         let Some(path) = learned.path else {
             result.rounds.push(summary);
-            let why = format!(
-                "the learned greedy path does not reach the target after {} episodes (round {round}, seed {})",
-                opts.train.episodes, opts.train.seed
-            );
+            let why = learner.no_path_reason(round);
             return Ok(finish(result, Some(why)));
         };
         match planner.plan_poses(&path, &beta0) {

@@ -12,7 +12,7 @@ use sixaxis_core::{GridWorld, PosePlanner, Scenario};
 fn run(s: &Scenario, seed: u64) -> PlanResult {
     let mut o = PlanOptions::from_scenario(s);
     o.train.seed = seed;
-    plan(s, &o, None).unwrap()
+    plan(s, &o, None, None).unwrap()
 }
 
 /// Re-check a successful result's poses independently of the planner.
@@ -144,7 +144,7 @@ fn unlearned_path_is_a_clear_failure() {
     let s = Scenario::builtin("paper_simple").unwrap();
     let mut o = PlanOptions::from_scenario(&s);
     o.train.episodes = 1;
-    let r = plan(&s, &o, None).unwrap();
+    let r = plan(&s, &o, None, None).unwrap();
     assert!(!r.success);
     assert!(r
         .failure
@@ -203,4 +203,76 @@ fn generator_rejects_bad_options_and_expands_names() {
         .unwrap_err()
         .to_string()
         .contains("generated:x"));
+}
+
+#[test]
+fn default_learner_is_the_tabular_q_learner_bit_for_bit() {
+    use sixaxis_core::replanning::QLearner;
+    let s = Scenario::load("replan_clutter").unwrap();
+    let o = PlanOptions::from_scenario(&s);
+    let default = without_times(plan(&s, &o, None, None).unwrap());
+    let mut q = QLearner {
+        opts: o.train.clone(),
+    };
+    let explicit = without_times(plan(&s, &o, Some(&mut q), None).unwrap());
+    assert_eq!(default, explicit);
+    assert!(default.replans >= 1);
+    assert!(default.rounds.iter().all(|r| r.length_converged_episode.is_some()));
+}
+
+#[test]
+fn bfs_learner_plans_each_round_on_that_rounds_world() {
+    use sixaxis_core::replanning::BfsLearner;
+    let s = Scenario::load("replan_clutter").unwrap();
+    let o = PlanOptions::from_scenario(&s);
+    let r = plan(&s, &o, Some(&mut BfsLearner), None).unwrap();
+    check_result(&s, &r);
+    for round in &r.rounds {
+        let added = &r.added_obstacles[..round.added_obstacles];
+        let world = GridWorld::with_extra_obstacles(&s, added).unwrap();
+        assert_eq!(round.path, world.shortest_path());
+        assert_eq!(round.total_steps, 0);
+    }
+}
+
+/// A learner that returns a fixed path, to see the core reject it.
+struct Fixed(Vec<sixaxis_core::Cell>);
+
+impl sixaxis_core::replanning::PathLearner for Fixed {
+    fn learn_path(
+        &mut self,
+        _world: &GridWorld,
+        _round: &sixaxis_core::replanning::Round<'_>,
+    ) -> sixaxis_core::Result<sixaxis_core::replanning::LearnedPath> {
+        Ok(sixaxis_core::replanning::LearnedPath {
+            path: Some(self.0.clone()),
+            ..Default::default()
+        })
+    }
+}
+
+#[test]
+fn invalid_learned_paths_are_rejected_with_the_rule_they_break() {
+    let s = Scenario::load("paper_simple").unwrap();
+    let o = PlanOptions::from_scenario(&s);
+    let good = GridWorld::new(&s).unwrap().shortest_path().unwrap();
+    let obstacle = s.obstacles[0];
+    let cases = [
+        (good[1..].to_vec(), "must start at the start cell"),
+        (good[..good.len() - 1].to_vec(), "must end at the target cell"),
+        (
+            [&good[..1], &good[2..]].concat(),
+            "is not a move to one of the six neighbouring cells",
+        ),
+        (vec![s.start, obstacle, s.target], "is an obstacle"),
+        (Vec::new(), "empty path"),
+    ];
+    for (path, words) in cases {
+        let e = plan(&s, &o, Some(&mut Fixed(path)), None).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(words), "{text}");
+        assert!(text.starts_with("invalid argument `path`"), "{text}");
+    }
+    let ok = plan(&s, &o, Some(&mut Fixed(good.clone())), None).unwrap();
+    assert!(ok.success && ok.path == good);
 }

@@ -1,6 +1,8 @@
 //! Python exceptions of the core's errors, and the one helper that runs core code.
 //!
-//! Hierarchy (every class is a `ValueError` through `SixAxisError`):
+//! Hierarchy (every error of bad input is a `ValueError` through `SixAxisError`; a caught
+//! panic is a bug, not bad input, so `InternalError` is a `RuntimeError` only and
+//! `except ValueError` does not swallow it):
 //!
 //! ```text
 //! ValueError
@@ -10,8 +12,9 @@
 //!     │   └── ScenarioNotFoundError           Error::ScenarioNotFound  (also a LookupError)
 //!     ├── InvalidArgumentError                Error::InvalidArgument
 //!     ├── QTableMismatchError                 Error::QTableMismatch
-//!     ├── SixAxisIOError                      Error::Io                (also an OSError)
-//!     └── InternalError                       a Rust panic              (also a RuntimeError)
+//!     └── SixAxisIOError                      Error::Io                (also an OSError)
+//! RuntimeError
+//! └── InternalError                           a Rust panic
 //! ```
 //!
 //! The classes are made with Python's `type()` at import time because some of them have two
@@ -46,7 +49,7 @@ macro_rules! exc {
 exc!(
     SIXAXIS_ERROR,
     "SixAxisError",
-    "Base class of every error raised by sixaxis_avoid (a ValueError)."
+    "Base class of every bad-input error raised by sixaxis_avoid (a ValueError); a caught panic is InternalError instead."
 );
 exc!(
     SCENARIO_ERROR,
@@ -81,7 +84,7 @@ exc!(
 exc!(
     INTERNAL_ERROR,
     "InternalError",
-    "A bug in sixaxis_avoid's Rust core (a caught panic; please report it). Also a RuntimeError."
+    "A bug in sixaxis_avoid's Rust core (a caught panic; please report it). A RuntimeError, not a ValueError."
 );
 
 fn get<'py>(py: Python<'py>, def: &'static ExcDef) -> Bound<'py, PyType> {
@@ -128,7 +131,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     )?;
     make(
         &INTERNAL_ERROR,
-        vec![base(), py.get_type::<PyRuntimeError>().into_any()],
+        vec![py.get_type::<PyRuntimeError>().into_any()],
     )?;
     Ok(())
 }

@@ -12,6 +12,7 @@ mod env_core;
 mod errors;
 mod plan;
 mod planner;
+mod request;
 mod scenario;
 mod train;
 

@@ -2,17 +2,24 @@
 //! random cluttered scenarios). Thin: argument checks here, everything else in the core,
 //! long calls through [`crate::errors::run`] (GIL released, panics caught).
 
+use std::sync::Mutex;
+use std::time::Instant;
+
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyTuple};
+use pyo3::types::{PyDict, PyString, PyTuple};
 use sixaxis_core::generator::{generate, GeneratorOptions};
-use sixaxis_core::replanning::{plan as core_plan, PlanOptions, PlanResult};
+use sixaxis_core::replanning::{
+    plan as core_plan, BfsLearner, LearnedPath, PathLearner, PlanResult, Round,
+};
+use sixaxis_core::request::{int_domain, LearnerKind, PlanRequest, MAX_REPLANS, SEED};
 use sixaxis_core::scenario::Bounds;
-use sixaxis_core::{Assist, Cell};
+use sixaxis_core::{Cell, Error as CoreError, GridWorld, Result as CoreResult};
 
 use crate::convert::{cell, json_to_py, repr};
-use crate::errors::{invalid_argument, run};
+use crate::errors::{invalid_argument, run, run_attached};
+use crate::request::{int_kw, train_request};
 use crate::scenario::{scenario_from_any, PyScenario};
 
 /// What :func:`plan` returns: the core's ``PlanResult`` (Algorithm 2), read-only.
@@ -87,7 +94,8 @@ impl PyPlanResult {
         self.inner.failure.as_deref()
     }
     /// Per-round learning figures: a list of dicts with ``added_obstacles`` (count before
-    /// the round), ``path`` (or ``None``), ``converged_episode``, ``total_steps``,
+    /// the round), ``path`` (or ``None``), ``converged_episode``,
+    /// ``length_converged_episode``, ``total_steps``,
     /// ``learning_time_s`` and ``blocked_at`` (``[index, [x, y, z]]`` or ``None``).
     #[getter]
     fn rounds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -159,33 +167,189 @@ impl PyPlanResult {
     }
 }
 
-/// An integer keyword in `min..=max` (bools rejected), or `None` when absent.
-fn uint_arg(
+/// A Python path learner: a callable `learner(scenario, seed)` or an object with a
+/// `learn_path(scenario, seed)` method, called with the GIL held once per round (the rest of
+/// Algorithm 2 runs with the GIL released). Its first exception is kept in `error` and
+/// re-raised unchanged once the core loop has stopped.
+struct PyLearner<'a> {
+    callable: Py<PyAny>,
+    seed: u64,
+    error: &'a Mutex<Option<PyErr>>,
+}
+
+/// Stops the core loop after the Python learner raised; the binding re-raises the original.
+fn learner_raised() -> CoreError {
+    CoreError::argument("learner", "a Python learner", "raised an exception")
+}
+
+impl PathLearner for PyLearner<'_> {
+    fn learn_path(&mut self, _world: &GridWorld, round: &Round<'_>) -> CoreResult<LearnedPath> {
+        let t0 = Instant::now();
+        let outcome = Python::attach(|py| -> PyResult<CoreResult<LearnedPath>> {
+            let mut world = round.scenario.clone();
+            world.obstacles.extend_from_slice(round.added_obstacles);
+            let arg = Bound::new(py, PyScenario::new(world))?;
+            let ret = self.callable.bind(py).call1((arg, self.seed))?;
+            learned_of(py, &ret, t0)
+        });
+        match outcome {
+            Ok(r) => r,
+            Err(e) => {
+                let mut slot = self.error.lock().unwrap_or_else(|p| p.into_inner());
+                slot.get_or_insert(e);
+                Err(learner_raised())
+            }
+        }
+    }
+
+    fn no_path_reason(&self, round: u32) -> String {
+        format!("the Python path learner returned no path (round {round})")
+    }
+}
+
+/// A Python learner's return value: a list of cells, `None`, or a dict with `path` and
+/// optional `total_steps`, `converged_episode`, `length_converged_episode`, `wall_time_s`.
+fn learned_of(
     py: Python<'_>,
-    name: &str,
-    obj: Option<&Bound<'_, PyAny>>,
-    min: u64,
-    max: u64,
-) -> PyResult<Option<u64>> {
-    let Some(o) = obj.filter(|o| !o.is_none()) else {
-        return Ok(None);
+    ret: &Bound<'_, PyAny>,
+    t0: Instant,
+) -> PyResult<CoreResult<LearnedPath>> {
+    let mut out = LearnedPath::default();
+    let path_obj = if let Ok(d) = ret.cast::<PyDict>() {
+        for (k, v) in d.iter() {
+            let key: String = k.extract()?;
+            let field = format!("learner result `{key}`");
+            match key.as_str() {
+                "path" => {}
+                "total_steps" => {
+                    out.total_steps =
+                        int_kw(py, (&field, 0, u64::MAX as i128), Some(&v))?.map_or(0, |v| v as u64)
+                }
+                "converged_episode" => {
+                    out.converged_episode =
+                        int_kw(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
+                }
+                "length_converged_episode" => {
+                    out.length_converged_episode =
+                        int_kw(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
+                }
+                "wall_time_s" => out.wall_time_s = v.extract()?,
+                _ => {}
+            }
+        }
+        d.get_item("path")?.ok_or_else(|| {
+            invalid_argument(
+                py,
+                "learner",
+                repr(ret),
+                "a dict result needs a \"path\" key",
+            )
+        })?
+    } else {
+        ret.clone()
     };
-    let bad = || {
-        let domain = if max == u64::MAX {
-            format!("must be an integer >= {min}")
+    if out.wall_time_s == 0.0 {
+        out.wall_time_s = t0.elapsed().as_secs_f64();
+    }
+    if !path_obj.is_none() {
+        let items = path_obj.try_iter().map_err(|_| {
+            invalid_argument(
+                py,
+                "learner",
+                repr(&path_obj),
+                "must return a list of (x, y, z) cells, None, or a dict with a \"path\"",
+            )
+        })?;
+        let cells = items
+            .map(|c| cell(&c?, "path"))
+            .collect::<PyResult<Vec<Cell>>>()?;
+        out.path = Some(cells);
+    }
+    Ok(Ok(out))
+}
+
+/// Run Algorithm 2 on a scenario: learn a terminal path, plan the arm's poses along it
+/// (Algorithm 1), and re-plan around every path point no safe pose reaches.
+///
+/// Keywords as :func:`train` (``None`` takes the scenario's ``learning`` value;
+/// ``assist`` switches eqs. 9 and 10 together, ``detour`` / ``distance`` each on its own);
+/// ``max_replans`` defaults to the scenario's ``planning.max_replans``. ``learner`` is
+/// ``"qlearning"`` (default, the paper's), ``"bfs"`` (breadth-first shortest path), or a
+/// Python callable ``learner(scenario, seed)`` / an object with a ``learn_path(scenario,
+/// seed)`` method: called once per round with the round's world (the scenario with every
+/// point added so far appended to its obstacles), it returns the path as a list of
+/// ``(x, y, z)`` cells from start to target, ``None`` when it found none, or a dict
+/// ``{"path": ..., "total_steps": int, ...}``. The core checks every path (start, target,
+/// neighbouring steps, no obstacle); an exception the learner raises propagates unchanged.
+/// Same arithmetic and random stream as ``sixaxis plan``. A plan that cannot be completed
+/// is returned with ``success=False`` and a ``failure`` reason; bad arguments raise
+/// :class:`InvalidArgumentError`. The GIL is released while the core works.
+#[pyfunction]
+#[pyo3(signature = (scenario=None, *, seed=None, episodes=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, max_replans=None, learner=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn plan(
+    py: Python<'_>,
+    scenario: Option<&Bound<'_, PyAny>>,
+    seed: Option<&Bound<'_, PyAny>>,
+    episodes: Option<&Bound<'_, PyAny>>,
+    assist: Option<&Bound<'_, PyAny>>,
+    detour: Option<&Bound<'_, PyAny>>,
+    distance: Option<&Bound<'_, PyAny>>,
+    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
+    max_replans: Option<&Bound<'_, PyAny>>,
+    learner: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyPlanResult> {
+    let s = scenario_from_any(py, scenario)?;
+    let mut req = PlanRequest {
+        train: train_request(
+            py,
+            episodes,
+            seed,
+            assist,
+            detour,
+            distance,
+            max_steps_per_episode,
+        )?,
+        max_replans: int_kw(py, MAX_REPLANS, max_replans)?,
+        learner: None,
+    };
+    let mut callable: Option<Py<PyAny>> = None;
+    if let Some(l) = learner.filter(|l| !l.is_none()) {
+        if let Ok(name) = l.cast::<PyString>() {
+            req.learner = Some(name.to_string());
+        } else if let Ok(method) = l.getattr("learn_path") {
+            callable = Some(method.unbind());
+        } else if l.is_callable() {
+            callable = Some(l.clone().unbind());
         } else {
-            format!("must be an integer in {min}..={max}")
-        };
-        invalid_argument(py, name, repr(o), domain)
+            return Err(invalid_argument(
+                py,
+                "learner",
+                repr(l),
+                "must be \"qlearning\", \"bfs\", a callable learner(scenario, seed) or an object with a learn_path(scenario, seed) method",
+            ));
+        }
+    }
+    let (opts, kind) = run_attached(py, || req.resolve(&s))?;
+    let error: Mutex<Option<PyErr>> = Mutex::new(None);
+    let result = match callable {
+        Some(callable) => {
+            let mut l = PyLearner {
+                callable,
+                seed: opts.train.seed,
+                error: &error,
+            };
+            run(py, || core_plan(&s, &opts, Some(&mut l), None))
+        }
+        None => match kind {
+            LearnerKind::Qlearning => run(py, || core_plan(&s, &opts, None, None)),
+            LearnerKind::Bfs => run(py, || core_plan(&s, &opts, Some(&mut BfsLearner), None)),
+        },
     };
-    if o.is_instance_of::<PyBool>() {
-        return Err(bad());
+    if let Some(e) = error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
     }
-    let v: i128 = o.extract().map_err(|_| bad())?;
-    if v < min as i128 || v > max as i128 {
-        return Err(bad());
-    }
-    Ok(Some(v as u64))
+    Ok(PyPlanResult { inner: result? })
 }
 
 fn finite(py: Python<'_>, name: &str, v: f64) -> PyResult<f64> {
@@ -194,44 +358,6 @@ fn finite(py: Python<'_>, name: &str, v: f64) -> PyResult<f64> {
     } else {
         Err(invalid_argument(py, name, v, "must be a finite number"))
     }
-}
-
-/// Run Algorithm 2 on a scenario: learn a terminal path (tabular Q-learning), plan the arm's
-/// poses along it (Algorithm 1), and re-plan around every path point no safe pose reaches.
-///
-/// ``seed`` and ``episodes`` default to the scenario's ``learning`` values; ``assist``
-/// switches both assisted-learning strategies (eqs. 9, 10) on or off (``None``: the
-/// scenario's flags); ``max_replans`` defaults to the scenario's ``planning.max_replans``.
-/// Same arithmetic and random stream as ``sixaxis plan``: for the same arguments the result
-/// is the same (wall times aside). A plan that cannot be completed is returned with
-/// ``success=False`` and a ``failure`` reason; bad arguments raise
-/// :class:`InvalidArgumentError`. The GIL is released while planning.
-#[pyfunction]
-#[pyo3(signature = (scenario=None, seed=None, episodes=None, assist=Some(true), max_replans=None))]
-pub fn plan(
-    py: Python<'_>,
-    scenario: Option<&Bound<'_, PyAny>>,
-    seed: Option<&Bound<'_, PyAny>>,
-    episodes: Option<&Bound<'_, PyAny>>,
-    assist: Option<bool>,
-    max_replans: Option<&Bound<'_, PyAny>>,
-) -> PyResult<PyPlanResult> {
-    let s = scenario_from_any(py, scenario)?;
-    let mut opts = PlanOptions::from_scenario(&s);
-    if let Some(v) = uint_arg(py, "seed", seed, 0, u64::MAX)? {
-        opts.train.seed = v;
-    }
-    if let Some(v) = uint_arg(py, "episodes", episodes, 1, u32::MAX as u64)? {
-        opts.train.episodes = v as u32;
-    }
-    if let Some(a) = assist {
-        opts.train.assist = if a { Assist::on() } else { Assist::off() };
-    }
-    if let Some(v) = uint_arg(py, "max_replans", max_replans, 0, u32::MAX as u64)? {
-        opts.max_replans = v as u32;
-    }
-    let inner = run(py, || core_plan(&s, &opts, None))?;
-    Ok(PyPlanResult { inner })
 }
 
 fn bounds_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Bounds> {
@@ -292,8 +418,10 @@ pub fn generate_scenario(
     max_attempts: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyScenario> {
     let mut opts = GeneratorOptions::default();
-    let seed = uint_arg(py, "seed", Some(seed), 0, u64::MAX)?
-        .ok_or_else(|| invalid_argument(py, "seed", "None", "must be an integer >= 0"))?;
+    let seed = int_kw(py, SEED, Some(seed))?
+        .ok_or_else(|| invalid_argument(py, "seed", "None", "must be an integer >= 0"))?
+        .try_into()
+        .map_err(|_| invalid_argument(py, "seed", repr(seed), int_domain(SEED.1, SEED.2)))?;
     opts.density = finite(py, "density", density)?;
     if let Some(b) = bounds.filter(|b| !b.is_none()) {
         opts.bounds = bounds_arg(py, b)?;
@@ -302,8 +430,10 @@ pub fn generate_scenario(
         finite(py, "min_start_target_distance", min_start_target_distance)?;
     opts.require_arm_reachable = require_arm_reachable;
     opts.template = template.to_string();
-    if let Some(m) = uint_arg(py, "max_attempts", max_attempts, 1, u32::MAX as u64)? {
-        opts.max_attempts = m as u32;
+    if let Some(m) = int_kw(py, ("max_attempts", 1, u32::MAX as i128), max_attempts)? {
+        opts.max_attempts = u32::try_from(m).map_err(|_| {
+            invalid_argument(py, "max_attempts", m, int_domain(1, u32::MAX as i128))
+        })?;
     }
     let s = run(py, || generate(&opts, seed))?;
     Ok(PyScenario::new(s))

@@ -6,11 +6,12 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable, TrainOptions};
+use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable};
 use sixaxis_core::{Cell, GridWorld, Scenario};
 
 use crate::convert::{cell, repr};
 use crate::errors::{invalid_argument, run, run_attached};
+use crate::request::train_request;
 use crate::scenario::{scenario_from_any, PyScenario};
 
 /// What :func:`train` returns.
@@ -22,6 +23,7 @@ pub struct PyTrainResult {
     steps_per_episode: Vec<u32>,
     reached_per_episode: Vec<bool>,
     converged_episode: Option<u32>,
+    length_converged_episode: Option<u32>,
     total_steps: u64,
     wall_time_s: f64,
     q: QTable,
@@ -75,6 +77,12 @@ impl PyTrainResult {
     #[getter]
     fn converged_episode(&self) -> Option<u32> {
         self.converged_episode
+    }
+    /// First episode (from 0) from which the greedy path's *length* no longer changed (later
+    /// changes, if any, swap equally long paths); ``None`` if the final path fails.
+    #[getter]
+    fn length_converged_episode(&self) -> Option<u32> {
+        self.length_converged_episode
     }
     #[getter]
     fn total_steps(&self) -> u64 {
@@ -189,47 +197,37 @@ fn q_from_array(
 ///
 /// Same arithmetic and random stream as the core (and the ``sixaxis train`` CLI): for the
 /// same scenario, seed, episodes and assist, path and Q-table values are identical.
-/// Keyword arguments left as ``None`` take the scenario's ``learning`` values.
-/// ``progress(episodes_done)`` is called about 100 times; an exception it raises is
-/// re-raised after training. The GIL is released while learning.
+/// Keyword arguments left as ``None`` take the scenario's ``learning`` values; ``assist``
+/// switches eqs. 9 and 10 together, ``detour`` (eq. 9) and ``distance`` (eq. 10) each on its
+/// own (after ``assist``). ``progress(episodes_done)`` is called about 100 times; an
+/// exception it raises is re-raised after training. The GIL is released while learning.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, episodes=None, seed=None, assist=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
+#[pyo3(signature = (scenario=None, *, episodes=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
-    episodes: Option<i64>,
-    seed: Option<i64>,
-    assist: Option<bool>,
-    max_steps_per_episode: Option<i64>,
+    episodes: Option<&Bound<'_, PyAny>>,
+    seed: Option<&Bound<'_, PyAny>>,
+    assist: Option<&Bound<'_, PyAny>>,
+    detour: Option<&Bound<'_, PyAny>>,
+    distance: Option<&Bound<'_, PyAny>>,
+    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     extra_obstacles: Option<&Bound<'_, PyAny>>,
     initial_q: Option<PyReadonlyArray2<'_, f64>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
-    let mut opts = TrainOptions::from_scenario(&s);
-    if let Some(e) = episodes {
-        opts.episodes = u32::try_from(e)
-            .ok()
-            .filter(|&e| e > 0)
-            .ok_or_else(|| invalid_argument(py, "episodes", e, "must be in 1..=4294967295"))?;
-    }
-    if let Some(v) = seed {
-        opts.seed =
-            u64::try_from(v).map_err(|_| invalid_argument(py, "seed", v, "must be >= 0"))?;
-    }
-    if let Some(a) = assist {
-        opts.assist = if a {
-            sixaxis_core::Assist::on()
-        } else {
-            sixaxis_core::Assist::off()
-        };
-    }
-    if let Some(m) = max_steps_per_episode {
-        opts.max_steps_per_episode = u32::try_from(m).ok().filter(|&m| m > 0).ok_or_else(|| {
-            invalid_argument(py, "max_steps_per_episode", m, "must be in 1..=4294967295")
-        })?;
-    }
+    let req = train_request(
+        py,
+        episodes,
+        seed,
+        assist,
+        detour,
+        distance,
+        max_steps_per_episode,
+    )?;
+    let opts = run_attached(py, || req.resolve(&s))?;
     let world = world_of(py, &s, extra_obstacles)?;
     let q0 = initial_q.map(|a| q_from_array(py, a, &world)).transpose()?;
     let cb_error: Mutex<Option<PyErr>> = Mutex::new(None);
@@ -266,6 +264,7 @@ pub fn train(
         steps_per_episode: result.steps_per_episode,
         reached_per_episode: result.reached_per_episode,
         converged_episode: result.converged_episode,
+        length_converged_episode: result.length_converged_episode,
         total_steps: result.total_steps,
         wall_time_s: result.wall_time_s,
         q: result.q,

@@ -1,0 +1,79 @@
+//! Python keywords -> the core's requests ([`sixaxis_core::request`]): only the conversion
+//! of each value's Python type happens here; ranges, defaults and the rules that combine
+//! keywords are the core's, shared with the `sixaxis` CLI.
+
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyInt};
+use sixaxis_core::request::{int_domain, TrainRequest, EPISODES, MAX_STEPS, SEED};
+
+use crate::convert::repr;
+use crate::errors::invalid_argument;
+
+/// An integer keyword (bools and non-integers rejected with the core's words), or `None`.
+pub fn int_kw(
+    py: Python<'_>,
+    domain: (&str, i128, i128),
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<i128>> {
+    let Some(o) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    let (name, min, max) = domain;
+    let bad = || invalid_argument(py, name, repr(o), int_domain(min, max));
+    if o.is_instance_of::<PyBool>() {
+        return Err(bad());
+    }
+    // Python ints and integer-like objects (numpy integers) through __index__.
+    let as_int = if o.is_instance_of::<PyInt>() {
+        o.clone()
+    } else {
+        o.call_method0("__index__").map_err(|_| bad())?
+    };
+    as_int.extract::<i128>().map(Some).map_err(|_| bad())
+}
+
+/// A bool keyword (`True`, `False`, a numpy bool, or `None`).
+pub fn bool_kw(
+    py: Python<'_>,
+    name: &str,
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<bool>> {
+    let Some(o) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    let is_numpy_bool = o
+        .get_type()
+        .name()
+        .map(|n| n.to_string() == "bool" || n.to_string() == "bool_")
+        .unwrap_or(false);
+    if o.is_instance_of::<PyBool>() || is_numpy_bool {
+        return o.is_truthy().map(Some);
+    }
+    Err(invalid_argument(
+        py,
+        name,
+        repr(o),
+        "must be True, False or None",
+    ))
+}
+
+/// The keywords `train` and `plan` share, as a training request.
+#[allow(clippy::too_many_arguments)]
+pub fn train_request(
+    py: Python<'_>,
+    episodes: Option<&Bound<'_, PyAny>>,
+    seed: Option<&Bound<'_, PyAny>>,
+    assist: Option<&Bound<'_, PyAny>>,
+    detour: Option<&Bound<'_, PyAny>>,
+    distance: Option<&Bound<'_, PyAny>>,
+    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
+) -> PyResult<TrainRequest> {
+    Ok(TrainRequest {
+        episodes: int_kw(py, EPISODES, episodes)?,
+        seed: int_kw(py, SEED, seed)?,
+        assist: bool_kw(py, "assist", assist)?,
+        detour: bool_kw(py, "detour", detour)?,
+        distance: bool_kw(py, "distance", distance)?,
+        max_steps_per_episode: int_kw(py, MAX_STEPS, max_steps_per_episode)?,
+    })
+}

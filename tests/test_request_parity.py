@@ -1,0 +1,159 @@
+"""One request layer: the same arguments to ``sixaxis train|plan`` and to
+``sixaxis_avoid.train|plan`` give the same run, or the same error text.
+
+Every row of ``GOOD`` and ``BAD`` is a keyword dict for Python and the flags that say the
+same on the command line; the CLI and the bindings only map them to the core's request.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import pytest
+import sixaxis_avoid as sa
+
+SCENARIO = "paper_simple"
+
+# (Python keywords, CLI flags) meaning the same thing.
+GOOD = [
+    ({"episodes": 300}, ["--episodes", "300"]),
+    ({"seed": 3, "episodes": 300}, ["--seed", "3", "--episodes", "300"]),
+    ({"assist": False, "episodes": 300}, ["--no-assist", "--episodes", "300"]),
+    ({"detour": False, "episodes": 300}, ["--no-detour", "--episodes", "300"]),
+    (
+        {"assist": False, "distance": True, "episodes": 300},
+        ["--no-assist", "--distance", "--episodes", "300"],
+    ),
+    (
+        {"max_steps_per_episode": 40, "seed": 1, "episodes": 300},
+        ["--max-steps-per-episode", "40", "--seed", "1", "--episodes", "300"],
+    ),
+]
+
+# (Python keywords, CLI flags, the error text both give).
+BAD = [
+    ({"seed": -1}, ["--seed", "-1"], "invalid argument `seed` = -1: must be an integer >= 0"),
+    (
+        {"seed": 2**64},
+        ["--seed", str(2**64)],
+        f"invalid argument `seed` = {2**64}: must be an integer >= 0",
+    ),
+    ({"seed": 1.5}, ["--seed", "1.5"], "invalid argument `seed` = 1.5: must be an integer >= 0"),
+    (
+        {"episodes": 0},
+        ["--episodes", "0"],
+        "invalid argument `episodes` = 0: must be an integer in 1..=4294967295",
+    ),
+    (
+        {"episodes": 2**32},
+        ["--episodes", str(2**32)],
+        "invalid argument `episodes` = 4294967296: must be an integer in 1..=4294967295",
+    ),
+    (
+        {"max_steps_per_episode": 0},
+        ["--max-steps-per-episode", "0"],
+        "invalid argument `max_steps_per_episode` = 0: must be an integer in 1..=4294967295",
+    ),
+]
+
+BAD_PLAN_ONLY = [
+    (
+        {"max_replans": -1},
+        ["--max-replans", "-1"],
+        "invalid argument `max_replans` = -1: must be an integer in 0..=4294967295",
+    ),
+    (
+        {"learner": "dqn"},
+        ["--learner", "dqn"],
+        "invalid argument `learner` = dqn: must be one of qlearning, bfs (or, from Python, a"
+        " callable)",
+    ),
+]
+
+
+def cli(sixaxis_bin, command: str, flags: list[str]) -> subprocess.CompletedProcess:
+    cmd = [str(sixaxis_bin), command, "--scenario", SCENARIO, "-q", *flags]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+
+
+def untimed(d: dict) -> dict:
+    d = dict(d)
+    d.pop("wall_time_s", None)
+    d["rounds"] = [{k: v for k, v in r.items() if k != "learning_time_s"} for r in d["rounds"]]
+    return d
+
+
+@pytest.mark.parametrize(("kwargs", "flags"), GOOD)
+def test_train_same_run(sixaxis_bin, kwargs, flags):
+    proc = cli(sixaxis_bin, "train", flags)
+    assert proc.returncode == 0, proc.stderr
+    c = json.loads(proc.stdout)
+    p = sa.train(SCENARIO, **kwargs)
+    assert (None if c["path"] is None else [tuple(x) for x in c["path"]]) == p.path
+    for key in ("converged_episode", "length_converged_episode", "total_steps", "seed"):
+        assert c[key] == getattr(p, key), key
+    assert c["episodes"] == p.episodes
+    assert c["steps_per_episode"] == p.steps_per_episode.tolist()
+
+
+@pytest.mark.parametrize(("kwargs", "flags"), GOOD)
+def test_plan_same_run_and_same_learning_as_train(sixaxis_bin, kwargs, flags):
+    proc = cli(sixaxis_bin, "plan", flags)
+    assert proc.returncode in (0, 1), proc.stderr
+    c = json.loads(proc.stdout)
+    p = sa.plan(SCENARIO, **kwargs)
+    assert untimed(c) == untimed(p.to_dict())
+    # train and plan share every default: round 0 of the plan is the training run.
+    t = sa.train(SCENARIO, **kwargs)
+    first = p.rounds[0]
+    assert first["path"] == (None if t.path is None else [list(x) for x in t.path])
+    assert first["total_steps"] == t.total_steps
+    assert first["converged_episode"] == t.converged_episode
+    assert first["length_converged_episode"] == t.length_converged_episode
+
+
+@pytest.mark.parametrize("command", ["train", "plan"])
+@pytest.mark.parametrize(("kwargs", "flags", "text"), BAD)
+def test_same_error(sixaxis_bin, command, kwargs, flags, text):
+    proc = cli(sixaxis_bin, command, flags)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.strip() == f"error: {text}"
+    fn = getattr(sa, command)
+    with pytest.raises(sa.InvalidArgumentError) as info:
+        fn(SCENARIO, **kwargs)
+    assert str(info.value) == text
+
+
+@pytest.mark.parametrize(("kwargs", "flags", "text"), BAD_PLAN_ONLY)
+def test_same_plan_error(sixaxis_bin, kwargs, flags, text):
+    proc = cli(sixaxis_bin, "plan", flags)
+    assert proc.returncode == 2 and proc.stderr.strip() == f"error: {text}"
+    with pytest.raises(sa.InvalidArgumentError) as info:
+        sa.plan(SCENARIO, **kwargs)
+    assert str(info.value) == text
+
+
+@pytest.mark.parametrize("command", ["train", "plan"])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"seed": True}, "seed"),
+        ({"episodes": False}, "episodes"),
+        ({"seed": "3"}, "seed"),
+        ({"assist": 1}, "assist"),
+        ({"detour": "yes"}, "detour"),
+    ],
+)
+def test_python_only_values_rejected_alike(command, kwargs, name):
+    """Values the command line cannot even spell (bools for integers, ints for switches)
+    are rejected by train and plan alike."""
+    with pytest.raises(sa.InvalidArgumentError) as info:
+        getattr(sa, command)(SCENARIO, **kwargs)
+    assert info.value.name == name
+
+
+@pytest.mark.parametrize("command", ["train", "plan"])
+def test_keyword_only_after_scenario(command):
+    with pytest.raises(TypeError):
+        getattr(sa, command)(SCENARIO, 0)
