@@ -67,36 +67,6 @@ pub fn benchmark_scenario(seed: u64) -> Result<Scenario> {
     generate(&GeneratorOptions::default(), seed)
 }
 
-/// Expand a comma-separated list of names where `generated:A..B` stands for
-/// `generated:A`, …, `generated:B` (inclusive).
-pub fn expand_names(list: &str) -> Result<Vec<String>> {
-    let mut out = Vec::new();
-    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        match item
-            .strip_prefix(GENERATED_PREFIX)
-            .and_then(|r| r.split_once(".."))
-        {
-            Some((a, b)) => {
-                let bad = || {
-                    Error::argument(
-                        "scenarios",
-                        item,
-                        "expected generated:A..B with whole numbers A <= B",
-                    )
-                };
-                let a: u64 = a.parse().map_err(|_| bad())?;
-                let b: u64 = b.parse().map_err(|_| bad())?;
-                if a > b || b - a > 10_000 {
-                    return Err(bad());
-                }
-                out.extend((a..=b).map(|i| format!("{GENERATED_PREFIX}{i}")));
-            }
-            None => out.push(item.to_string()),
-        }
-    }
-    Ok(out)
-}
-
 fn dist(a: Cell, b: Cell) -> f64 {
     let d: [f64; 3] = [0, 1, 2].map(|i| (a[i] - b[i]) as f64);
     (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()

@@ -38,6 +38,7 @@ pub mod grid;
 pub mod ik;
 pub mod io;
 pub mod kinematics;
+pub mod names;
 pub mod planner;
 pub mod qlearning;
 pub mod replanning;

@@ -29,7 +29,7 @@ pub type Cell = [i32; 3];
 /// Scenarios shipped in `envs/`, by name.
 pub const BUILTIN_NAMES: &[&str] = &["paper_simple", "paper_complex", "replan_clutter"];
 
-fn builtin_text(name: &str) -> Option<&'static str> {
+pub(crate) fn builtin_text(name: &str) -> Option<&'static str> {
     Some(match name {
         "paper_simple" => include_str!("../../../envs/paper_simple.json"),
         "paper_complex" => include_str!("../../../envs/paper_complex.json"),
@@ -263,38 +263,6 @@ fn fmt_cell(c: Cell) -> String {
 }
 
 impl Scenario {
-    /// Load a scenario by file path, by built-in name (`paper_simple`, ...), or as
-    /// `generated:SEED`, member SEED of the generated benchmark set
-    /// ([`crate::generator::benchmark_scenario`]). A name ending in `.json` or containing a
-    /// path separator is always read as a file.
-    pub fn load(name_or_path: &str) -> Result<Scenario> {
-        let path = Path::new(name_or_path);
-        if path.is_file() {
-            return Scenario::from_file(path);
-        }
-        if let Some(text) = builtin_text(name_or_path) {
-            return Scenario::from_json(text);
-        }
-        if let Some(seed) = name_or_path.strip_prefix(crate::generator::GENERATED_PREFIX) {
-            let seed: u64 = seed.parse().map_err(|_| {
-                Error::argument(
-                    "scenario",
-                    name_or_path,
-                    "a generated scenario is named generated:SEED with a whole-number seed",
-                )
-            })?;
-            return crate::generator::benchmark_scenario(seed);
-        }
-        if name_or_path.ends_with(".json") || name_or_path.contains(std::path::MAIN_SEPARATOR) {
-            // Reading it gives the precise I/O error (missing file, permission, ...).
-            return Scenario::from_file(path);
-        }
-        Err(Error::ScenarioNotFound {
-            name: name_or_path.to_string(),
-            known: BUILTIN_NAMES.join(", "),
-        })
-    }
-
     /// A built-in scenario by name.
     pub fn builtin(name: &str) -> Result<Scenario> {
         match builtin_text(name) {

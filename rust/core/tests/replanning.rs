@@ -4,7 +4,8 @@
 mod common;
 
 use common::check_poses;
-use sixaxis_core::generator::{expand_names, generate, GeneratorOptions};
+use sixaxis_core::generator::{generate, GeneratorOptions};
+use sixaxis_core::names::expand_names;
 use sixaxis_core::planner::PosePoint;
 use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};
 use sixaxis_core::{GridWorld, PosePlanner, Scenario};
@@ -217,7 +218,10 @@ fn default_learner_is_the_tabular_q_learner_bit_for_bit() {
     let explicit = without_times(plan(&s, &o, Some(&mut q), None).unwrap());
     assert_eq!(default, explicit);
     assert!(default.replans >= 1);
-    assert!(default.rounds.iter().all(|r| r.length_converged_episode.is_some()));
+    assert!(default
+        .rounds
+        .iter()
+        .all(|r| r.length_converged_episode.is_some()));
 }
 
 #[test]
@@ -259,7 +263,10 @@ fn invalid_learned_paths_are_rejected_with_the_rule_they_break() {
     let obstacle = s.obstacles[0];
     let cases = [
         (good[1..].to_vec(), "must start at the start cell"),
-        (good[..good.len() - 1].to_vec(), "must end at the target cell"),
+        (
+            good[..good.len() - 1].to_vec(),
+            "must end at the target cell",
+        ),
         (
             [&good[..1], &good[2..]].concat(),
             "is not a move to one of the six neighbouring cells",
