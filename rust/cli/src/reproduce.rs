@@ -22,7 +22,8 @@ use crate::Failure;
 /// Flags of `sixaxis reproduce`.
 #[derive(Args, Debug, Clone)]
 pub struct ReproduceArgs {
-    /// Scenarios to run (built-in names or files), comma-separated.
+    /// Scenarios to run (built-in names, files or generated:SEED), comma-separated;
+    /// generated:A..B stands for generated:A, ..., generated:B.
     #[arg(long, default_value = "paper_simple,paper_complex,replan_clutter")]
     pub scenarios: String,
     /// Seeds 0..N per experiment.
@@ -181,12 +182,7 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
     if a.seeds == 0 {
         return Err(Error::argument("--seeds", 0, "must be > 0").into());
     }
-    let names: Vec<&str> = a
-        .scenarios
-        .split(',')
-        .map(str::trim)
-        .filter(|n| !n.is_empty())
-        .collect();
+    let names = sixaxis_core::names::expand_names(&a.scenarios)?;
     let scenarios = names
         .iter()
         .map(|n| Scenario::load(n))

@@ -261,3 +261,37 @@ fn generate_writes_a_loadable_scenario() {
     assert_eq!(reach["free_cells"], 485);
     assert!((reach["target_best_clearance_cells"].as_f64().unwrap() - 0.75f64.sqrt()).abs() < 1e-9);
 }
+
+#[test]
+fn reproduce_expands_generated_ranges() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let report = dir.path().join("REPORT.md");
+    let v = ok_json(&[
+        "reproduce",
+        "--scenarios",
+        "generated:0..1",
+        "--seeds",
+        "1",
+        "--episodes",
+        "30",
+        "--no-figures",
+        "-q",
+        "--out-dir",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let names: Vec<&str> = v["scenarios"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["generated:0", "generated:1"]);
+    fails_with(
+        &["reproduce", "--scenarios", "generated:3..1", "--seeds", "1"],
+        2,
+        &["generated:3..1", "A <= B"],
+    );
+}

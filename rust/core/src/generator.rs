@@ -42,7 +42,8 @@ pub struct GeneratorOptions {
     pub require_arm_reachable: bool,
     /// Attempts before giving up.
     pub max_attempts: u32,
-    /// Every other field (rewards, learning, arm, safe distances, planning) comes from here.
+    /// Every other field (rewards, learning, arm, safe distances, planning) comes from this
+    /// scenario: a built-in name or a file ([`Scenario::open`]).
     pub template: String,
 }
 
@@ -88,7 +89,7 @@ pub fn generate(opts: &GeneratorOptions, seed: u64) -> Result<Scenario> {
             "must be a finite number >= 1 cell",
         ));
     }
-    let template = Scenario::load(&opts.template)?;
+    let template = Scenario::open(&opts.template)?;
     let b = opts.bounds;
     if (0..3).any(|i| b.min[i] > b.max[i]) {
         return Err(Error::argument(

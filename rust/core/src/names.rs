@@ -8,7 +8,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::generator::GENERATED_PREFIX;
-use crate::scenario::{builtin_text, Scenario, BUILTIN_NAMES};
+use crate::scenario::{builtin_text, Scenario};
 
 impl Scenario {
     /// Load a scenario by file path, by built-in name (`paper_simple`, ...), or as
@@ -16,14 +16,10 @@ impl Scenario {
     /// ([`crate::generator::benchmark_scenario`]). A name ending in `.json` or containing a
     /// path separator is always read as a file.
     pub fn load(name_or_path: &str) -> Result<Scenario> {
-        let path = Path::new(name_or_path);
-        if path.is_file() {
-            return Scenario::from_file(path);
+        if Path::new(name_or_path).is_file() || builtin_text(name_or_path).is_some() {
+            return Scenario::open(name_or_path);
         }
-        if let Some(text) = builtin_text(name_or_path) {
-            return Scenario::from_json(text);
-        }
-        if let Some(seed) = name_or_path.strip_prefix(crate::generator::GENERATED_PREFIX) {
+        if let Some(seed) = name_or_path.strip_prefix(GENERATED_PREFIX) {
             let seed: u64 = seed.parse().map_err(|_| {
                 Error::argument(
                     "scenario",
@@ -33,14 +29,7 @@ impl Scenario {
             })?;
             return crate::generator::benchmark_scenario(seed);
         }
-        if name_or_path.ends_with(".json") || name_or_path.contains(std::path::MAIN_SEPARATOR) {
-            // Reading it gives the precise I/O error (missing file, permission, ...).
-            return Scenario::from_file(path);
-        }
-        Err(Error::ScenarioNotFound {
-            name: name_or_path.to_string(),
-            known: BUILTIN_NAMES.join(", "),
-        })
+        Scenario::open(name_or_path)
     }
 }
 

@@ -1,10 +1,13 @@
-//! Scenarios: the world of one experiment, read from JSON (`envs/*.json`).
+//! Scenarios: the world of one experiment, read from JSON (`envs/*.json`). The bottom layer
+//! of the core: it knows nothing of the grid, the generator or the planner.
 //!
 //! Entry points:
-//! - [`Scenario::load`] — by built-in name (`paper_simple`) or by file path.
+//! - [`Scenario::open`] — by built-in name (`paper_simple`) or by file path;
+//!   [`Scenario::load`] (in [`crate::names`], one layer up) also takes `generated:SEED`.
 //! - [`Scenario::from_json`] / [`Scenario::to_json`] — text round trip; parsing rejects
 //!   unknown fields and then runs [`Scenario::validate`].
-//! - [`Scenario::builtin`] / [`BUILTIN_NAMES`] — the scenarios shipped in `envs/`, compiled in.
+//! - [`Scenario::builtin`] / [`BUILTIN_NAMES`] — the scenarios shipped with the crate
+//!   (`rust/core/scenarios/`, equal to `envs/`), compiled in.
 //!
 //! Field names say what a value is; the paper's symbols are in each field's doc line and in
 //! `docs/SCENARIOS.md`. Distances between cells are in cells (grid unit = `cell_mm` mm).
@@ -26,14 +29,15 @@ use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
 /// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.
 pub type Cell = [i32; 3];
 
-/// Scenarios shipped in `envs/`, by name.
+/// Built-in scenarios, by name: `rust/core/scenarios/*.json`, compiled into the crate (the
+/// files in the repository's `envs/` are the user-facing copies, checked equal by a test).
 pub const BUILTIN_NAMES: &[&str] = &["paper_simple", "paper_complex", "replan_clutter"];
 
 pub(crate) fn builtin_text(name: &str) -> Option<&'static str> {
     Some(match name {
-        "paper_simple" => include_str!("../../../envs/paper_simple.json"),
-        "paper_complex" => include_str!("../../../envs/paper_complex.json"),
-        "replan_clutter" => include_str!("../../../envs/replan_clutter.json"),
+        "paper_simple" => include_str!("../scenarios/paper_simple.json"),
+        "paper_complex" => include_str!("../scenarios/paper_complex.json"),
+        "replan_clutter" => include_str!("../scenarios/replan_clutter.json"),
         _ => return None,
     })
 }
@@ -263,6 +267,27 @@ fn fmt_cell(c: Cell) -> String {
 }
 
 impl Scenario {
+    /// A scenario by file path or built-in name (no generated names: those are
+    /// [`Scenario::load`]'s, one layer up). A name ending in `.json` or containing a path
+    /// separator is always read as a file.
+    pub fn open(name_or_path: &str) -> Result<Scenario> {
+        let path = Path::new(name_or_path);
+        if path.is_file() {
+            return Scenario::from_file(path);
+        }
+        if let Some(text) = builtin_text(name_or_path) {
+            return Scenario::from_json(text);
+        }
+        if name_or_path.ends_with(".json") || name_or_path.contains(std::path::MAIN_SEPARATOR) {
+            // Reading it gives the precise I/O error (missing file, permission, ...).
+            return Scenario::from_file(path);
+        }
+        Err(Error::ScenarioNotFound {
+            name: name_or_path.to_string(),
+            known: BUILTIN_NAMES.join(", "),
+        })
+    }
+
     /// A built-in scenario by name.
     pub fn builtin(name: &str) -> Result<Scenario> {
         match builtin_text(name) {

@@ -297,3 +297,38 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn envs_files_equal_the_built_in_copies() {
+    // The crate compiles in rust/core/scenarios/*.json; envs/ holds the user-facing copies.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut in_envs: Vec<String> = std::fs::read_dir(root.join("../../envs"))
+        .unwrap()
+        .filter_map(|e| {
+            let name = e.unwrap().file_name().into_string().unwrap();
+            name.strip_suffix(".json").map(str::to_string)
+        })
+        .collect();
+    in_envs.sort();
+    let mut builtin: Vec<String> = sixaxis_core::scenario::BUILTIN_NAMES
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    builtin.sort();
+    assert_eq!(
+        in_envs, builtin,
+        "envs/ and the built-in scenarios list the same names"
+    );
+    for name in sixaxis_core::scenario::BUILTIN_NAMES {
+        let envs = std::fs::read_to_string(root.join(format!("../../envs/{name}.json"))).unwrap();
+        let own = std::fs::read_to_string(root.join(format!("scenarios/{name}.json"))).unwrap();
+        assert_eq!(
+            envs, own,
+            "envs/{name}.json differs from rust/core/scenarios/{name}.json"
+        );
+        assert_eq!(
+            Scenario::from_json(&envs).unwrap(),
+            Scenario::builtin(name).unwrap()
+        );
+    }
+}
