@@ -194,8 +194,7 @@ pub fn unreachable_cells(scenario: &Scenario) -> Result<Vec<Cell>> {
 /// in the planner's grid order, IK solutions in IK order, within joint limits. `None` if
 /// there is none.
 pub fn first_clear_pose(planner: &PosePlanner, cell_mm: f64, cell: Cell) -> Option<Joints> {
-    let position_mm =
-        nalgebra::Vector3::new(cell[0] as f64, cell[1] as f64, cell[2] as f64) * cell_mm;
+    let position_mm = crate::scenario::cell_centre_mm(cell, cell_mm);
     let arm = planner.arm();
     planner.orientations().iter().find_map(|o| {
         arm.ik(&TerminalPose {

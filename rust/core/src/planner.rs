@@ -238,7 +238,7 @@ impl PosePlanner {
 
     /// Centre of a cell, mm.
     fn centre_mm(&self, c: Cell) -> Vector3<f64> {
-        Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64) * self.cell_mm
+        crate::scenario::cell_centre_mm(c, self.cell_mm)
     }
 
     /// Index of the grid orientation nearest to `r` (ties by grid order).

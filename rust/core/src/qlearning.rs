@@ -74,9 +74,7 @@
 //! Saving writes a temporary file in the same directory and renames it over the target;
 //! on any error the temporary file is removed.
 
-use std::io::Write;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use rand::{Rng, RngCore, SeedableRng};
@@ -319,7 +317,7 @@ impl QTable {
         );
         bytes.push(b'\n');
         bytes.extend_from_slice(&body);
-        write_atomic(path, &bytes)
+        crate::io::write_atomic(path, &bytes)
     }
 
     /// Read a table written by [`QTable::save`] and check it fits `world`
@@ -423,37 +421,6 @@ struct FileHeader {
     fingerprint: String,
     values_checksum: String,
     layout: String,
-}
-
-/// Write `bytes` to a temporary file beside `path`, sync it, rename it over `path`;
-/// remove the temporary file on any error.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path
-        .file_name()
-        .ok_or_else(|| Error::argument("path", path.display(), "has no file name"))?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::File::create_new(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(Error::io(path, e));
-    }
-    Ok(())
 }
 
 /// One update of eq. 6 for the step `state --action--> t`: bootstraps from

@@ -29,6 +29,12 @@ use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
 /// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.
 pub type Cell = [i32; 3];
 
+/// Position of the centre of cell `c` in a grid of `cell_mm` mm cells, mm (the one place
+/// that says where a cell is).
+pub fn cell_centre_mm(c: Cell, cell_mm: f64) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64) * cell_mm
+}
+
 /// Built-in scenarios, by name: `rust/core/scenarios/*.json`, compiled into the crate (the
 /// files in the repository's `envs/` are the user-facing copies, checked equal by a test).
 pub const BUILTIN_NAMES: &[&str] = &["paper_simple", "paper_complex", "replan_clutter"];
@@ -325,7 +331,7 @@ impl Scenario {
 
     /// Position of a cell's centre, mm.
     pub fn cell_centre_mm(&self, c: Cell) -> nalgebra::Vector3<f64> {
-        nalgebra::Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64) * self.cell_mm
+        cell_centre_mm(c, self.cell_mm)
     }
 
     /// Check every field; the error names the field and the value.
