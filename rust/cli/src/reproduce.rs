@@ -74,24 +74,6 @@ fn std_dev(xs: &[f64]) -> f64 {
     (xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (xs.len() - 1) as f64).sqrt()
 }
 
-fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
-    format!(
-        "{cpu}, {cores} cores, {} {}",
-        std::env::consts::OS,
-        std::env::consts::ARCH
-    )
-}
-
 /// One learning condition over all seeds.
 fn learn_condition(
     s: &Scenario,
@@ -231,7 +213,7 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
     }
     pb.finish_and_clear();
     let result = json!({
-        "machine": machine(),
+        "machine": sixaxis_core::host::machine(),
         "seeds": a.seeds,
         "episodes": a.episodes,
         "build": if cfg!(debug_assertions) { "debug" } else { "release" },

@@ -35,6 +35,7 @@ pub mod env;
 pub mod error;
 pub mod generator;
 pub mod grid;
+pub mod host;
 pub mod ik;
 pub mod io;
 pub mod kinematics;
