@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import concurrent.futures as cf
 import datetime as dt
+import io
 import json
 import math
 import multiprocessing as mp
@@ -37,7 +38,6 @@ import re
 import shlex
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -232,19 +232,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 def expand_names(text: str) -> list[str]:
-    """``a,generated:0..3`` -> ``[a, generated:0, ..., generated:3]`` (as the core does)."""
-    out: list[str] = []
-    for item in (s.strip() for s in text.split(",")):
-        if not item:
-            continue
-        m = re.fullmatch(r"generated:(\d+)\.\.(\d+)", item)
-        if m:
-            a, b = int(m.group(1)), int(m.group(2))
-            if a > b:
-                raise SystemExit(f"--scenarios: {item}: expected A <= B")
-            out.extend(f"generated:{i}" for i in range(a, b + 1))
-        else:
-            out.append(item)
+    """``a,generated:0..3`` -> ``[a, generated:0, ..., generated:3]`` (the core's rule)."""
+    import sixaxis_avoid as sa
+
+    try:
+        out = sa._core.expand_names(text)
+    except sa.InvalidArgumentError as e:
+        raise SystemExit(f"--scenarios: {e}") from None
     if not out:
         raise SystemExit("--scenarios: empty list")
     return out
@@ -309,37 +303,21 @@ def dqn_hyperparameters(args: argparse.Namespace) -> dict[str, Any]:
 # Small helpers
 
 
-def _umask_mode() -> int:
-    """0o666 less the process umask: what a plain ``open(..., "w")`` would give."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
 def atomic_write_text(path: Path, text: str) -> None:
+    """The core's atomic write (``io::write_atomic``), after making the directory."""
+    from sixaxis_avoid import _core
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.chmod(tmp, _umask_mode())  # mkstemp makes 0600 files
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    _core.write_atomic(path, text)
 
 
 def atomic_savefig(fig: Any, path: Path) -> None:
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=110, format=path.suffix.lstrip(".") or "png")
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from sixaxis_avoid import _core
+
+    _core.write_atomic(path, buf.getvalue())
 
 
 def cells(path: Any) -> list[list[int]] | None:
@@ -1155,15 +1133,9 @@ def write_report(result: dict[str, Any], path: Path, supplements: list[Path] = (
 
 
 def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}"
+    from sixaxis_avoid import _core
+
+    return _core.machine()
 
 
 def versions() -> dict[str, str]:

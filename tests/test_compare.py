@@ -9,7 +9,6 @@ import sys
 from pathlib import Path
 
 import pytest
-import sixaxis_avoid as sa
 
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPT = ROOT / "scripts" / "compare_learners.py"

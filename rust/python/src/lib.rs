@@ -15,6 +15,7 @@ mod planner;
 mod request;
 mod scenario;
 mod train;
+mod util;
 
 /// Raise the Python exception of one core error variant (for the tests of the mapping).
 /// `kind` is the variant's name: `InvalidScenario`, `ScenarioParse`, `ScenarioNotFound`,
@@ -64,6 +65,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<plan::PyPlanResult>()?;
     m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add_function(wrap_pyfunction!(plan::generate_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(util::write_atomic, m)?)?;
+    m.add_function(wrap_pyfunction!(util::machine, m)?)?;
+    m.add_function(wrap_pyfunction!(util::expand_names, m)?)?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     m.add("DEFAULT_SCENARIO", scenario::DEFAULT_SCENARIO)?;
     m.add_function(wrap_pyfunction!(_raise_core_error, m)?)?;
