@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
+import pytest
 import sixaxis_avoid  # noqa: F401
 from sixaxis_avoid import render as R
 
@@ -64,7 +65,8 @@ def test_human_mode_headless(monkeypatch):
 def test_render_without_mode_warns():
     env = gym.make("SixAxisAvoid-v0").unwrapped
     env.reset(seed=0)
-    assert env.render() is None
+    with pytest.warns(UserWarning, match="render_mode"):
+        assert env.render() is None
 
 
 def test_render_arm_follows_the_terminal():

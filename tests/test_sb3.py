@@ -56,3 +56,14 @@ def test_dqn_with_her_on_goal_obs(copy_info):
     )
     model.learn(total_timesteps=400)  # HER relabels through env.compute_reward
     assert model.replay_buffer.size() > 0
+    # Relabelled goals get the reward of their goal: reaching it pays (r), any other move
+    # costs (p outweighs eq. 10's progress term), whatever the episode's own target was.
+    # (With copied infos a collision that stays on the relabelled goal cell is a collision.)
+    batch = model.replay_buffer.sample(512)
+    achieved = batch.next_observations["achieved_goal"].numpy()
+    desired = batch.observations["desired_goal"].numpy()
+    rewards = batch.rewards.numpy().ravel()
+    reached = np.all(achieved == desired, axis=-1)
+    assert reached.any() and not reached.all()
+    assert (rewards[~reached] < 0).all()
+    assert (rewards[reached] > 0).all() if not copy_info else (rewards[reached] > 0).any()

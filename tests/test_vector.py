@@ -140,11 +140,21 @@ def test_reset_mask(near_target):
 
 
 def test_action_dtypes_accepted(near_target):
+    """Every integer dtype (and a plain list) is the same action: the same step results."""
+    results = []
+    for actions in [np.full(N, 3, dtype=dt) for dt in (np.int8, np.uint8, np.int32, np.int64)]:
+        env = _native(near_target)
+        env.reset(seed=0)
+        results.append(env.step(actions)[:4])
     env = _native(near_target)
-    env.reset(seed=0)
-    for dt in (np.int8, np.uint8, np.int32, np.int64):
-        env.step(np.ones(N, dtype=dt))
-    env.step([1] * N)
+    first, _ = env.reset(seed=0)
+    results.append(env.step([3] * N)[:4])
+    for obs, rew, term, trunc in results:
+        np.testing.assert_array_equal(obs, results[0][0])
+        np.testing.assert_array_equal(rew, results[0][1])
+        np.testing.assert_array_equal(term, results[0][2])
+        np.testing.assert_array_equal(trunc, results[0][3])
+    assert not np.array_equal(results[0][0], first), "action 3 (-y) moved the terminal"
 
 
 def test_native_vector_env_long_batch_stays_in_bounds():
@@ -160,6 +170,17 @@ def test_native_vector_env_long_batch_stays_in_bounds():
 
 
 def test_arm_id_vector(paper_simple):
+    """The arm-aware id's native vector env steps like its single env, action for action."""
     env = gym.make_vec("SixAxisAvoidArm-v0", num_envs=2)
-    env.reset(seed=0)
-    env.step(np.array([0, 1]))
+    assert isinstance(env.unwrapped, SixAxisAvoidVectorEnv)
+    obs, _ = env.reset(seed=0)
+    singles = [gym.make("SixAxisAvoidArm-v0") for _ in range(2)]
+    for i, single in enumerate(singles):
+        o, _ = single.reset(seed=0)
+        np.testing.assert_array_equal(obs[i], o)
+    for actions in ([0, 1], [4, 5], [2, 3]):
+        obs, rew, term, trunc, _ = env.step(np.array(actions))
+        for i, single in enumerate(singles):
+            o, r, te, tr, _ = single.step(actions[i])
+            np.testing.assert_array_equal(obs[i], o)
+            assert (rew[i], term[i], trunc[i]) == (r, te, tr)

@@ -11,18 +11,10 @@ import threading
 import numpy as np
 
 from sixaxis_avoid import _core
-from sixaxis_avoid._checks import invalid
 
 _lock = threading.Lock()
 _unreachable: dict[str, list[tuple[int, int, int]]] = {}
 _poses: dict[tuple[str, tuple[int, int, int]], np.ndarray | None] = {}
-
-
-def _require(name: str, keyword: str):
-    fn = getattr(_core, name, None)
-    if fn is None:
-        raise invalid(keyword, True, "this build of sixaxis_avoid has no pose planner")
-    return fn
 
 
 def unreachable_cells(scenario: _core.Scenario) -> list[tuple[int, int, int]]:
@@ -33,7 +25,7 @@ def unreachable_cells(scenario: _core.Scenario) -> list[tuple[int, int, int]]:
         hit = _unreachable.get(key)
     if hit is not None:
         return hit
-    cells = [tuple(c) for c in _require("unreachable_cells", "arm_aware")(scenario)]
+    cells = [tuple(c) for c in _core.unreachable_cells(scenario)]
     with _lock:
         _unreachable[key] = cells
     return cells
@@ -49,8 +41,7 @@ def clear_pose(scenario: _core.Scenario, cell: tuple[int, int, int]) -> np.ndarr
     if tuple(cell) == tuple(scenario.start):
         pose = np.radians(np.asarray(scenario.beta0_deg, dtype=np.float64))
     else:
-        fn = getattr(_core, "clear_pose_at", None)
-        q = fn(scenario, cell) if fn is not None else None
+        q = _core.clear_pose_at(scenario, cell)
         pose = None if q is None else np.asarray(q, dtype=np.float64)
     with _lock:
         _poses[key] = pose

@@ -61,8 +61,6 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         arm_aware: bool = False,
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
-        render_arm: bool = False,
-        render_size: int = 512,
         copy: bool = True,
     ):
         num_envs = check_positive_int("num_envs", num_envs)
@@ -71,7 +69,6 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         reward_scale = check_nonneg_float("reward_scale", reward_scale)
         random_target = check_bool("random_target", random_target)
         arm_aware = check_bool("arm_aware", arm_aware)
-        check_bool("render_arm", render_arm)
         self.copy = check_bool("copy", copy)
         if render_mode is not None:
             raise invalid(
