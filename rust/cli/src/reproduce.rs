@@ -123,6 +123,10 @@ fn learn_condition(
         .iter()
         .filter_map(|r| r["converged_episode"].as_f64())
         .collect();
+    let length_conv: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r["length_converged_episode"].as_f64())
+        .collect();
     Ok(json!({
         "assist": assist,
         "runs": runs,
@@ -132,6 +136,7 @@ fn learn_condition(
         "total_steps_mean": mean(&steps),
         "path_length_mean": mean(&lengths),
         "converged_episode_mean": mean(&conv),
+        "length_converged_episode_mean": mean(&length_conv),
         "mean_steps_per_episode": curve_sum.iter().map(|x| x / n).collect::<Vec<_>>(),
     }))
 }

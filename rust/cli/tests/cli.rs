@@ -137,6 +137,8 @@ fn train_json_and_atomic_out() {
     assert_eq!(v["path_length"], v["shortest_path_length"]);
     assert_eq!(v["steps_per_episode"].as_array().unwrap().len(), 10000);
     assert!(v["converged_episode"].as_u64().is_some());
+    let by_length = v["length_converged_episode"].as_u64().unwrap();
+    assert!(by_length <= v["converged_episode"].as_u64().unwrap());
     assert!(v["wall_time_s"].as_f64().unwrap() > 0.0);
     // Only the two result files are left in the directory: no temporary files.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
@@ -289,6 +291,11 @@ fn reproduce_expands_generated_ranges() {
         .map(|s| s["name"].as_str().unwrap())
         .collect();
     assert_eq!(names, ["generated:0", "generated:1"]);
+    let run = &v["scenarios"][0]["assisted"]["runs"][0];
+    assert!(run.get("length_converged_episode").is_some(), "{run}");
+    assert!(v["scenarios"][0]["assisted"]
+        .get("length_converged_episode_mean")
+        .is_some());
     fails_with(
         &["reproduce", "--scenarios", "generated:3..1", "--seeds", "1"],
         2,

@@ -115,8 +115,9 @@ pub fn int_domain(min: i128, max: i128) -> String {
     }
 }
 
-/// `value` checked against `min..=max`; the error names `name`.
-fn in_range(name: &str, value: i128, min: i128, max: i128) -> Result<i128> {
+/// `value` checked against `domain` = (name, min, max), e.g. [`SEED`]; the error names it.
+pub fn in_domain(domain: (&str, i128, i128), value: i128) -> Result<i128> {
+    let (name, min, max) = domain;
     if (min..=max).contains(&value) {
         Ok(value)
     } else {
@@ -143,8 +144,7 @@ pub fn parse_int(domain: (&str, i128, i128), text: &str) -> Result<i128> {
 }
 
 fn checked(domain: (&str, i128, i128), v: Option<i128>) -> Result<Option<i128>> {
-    v.map(|v| in_range(domain.0, v, domain.1, domain.2))
-        .transpose()
+    v.map(|v| in_domain(domain, v)).transpose()
 }
 
 impl TrainRequest {

@@ -19,7 +19,7 @@ use sixaxis_core::{Cell, Error as CoreError, GridWorld, Result as CoreResult};
 
 use crate::convert::{cell, json_to_py, repr};
 use crate::errors::{invalid_argument, run, run_attached};
-use crate::request::{int_kw, train_request};
+use crate::request::{int_in, int_kw, train_request};
 use crate::scenario::{scenario_from_any, PyScenario};
 
 /// What :func:`plan` returns: the core's ``PlanResult`` (Algorithm 2), read-only.
@@ -185,7 +185,7 @@ fn learner_raised() -> CoreError {
 impl PathLearner for PyLearner<'_> {
     fn learn_path(&mut self, _world: &GridWorld, round: &Round<'_>) -> CoreResult<LearnedPath> {
         let t0 = Instant::now();
-        let outcome = Python::attach(|py| -> PyResult<CoreResult<LearnedPath>> {
+        let outcome = Python::attach(|py| -> PyResult<LearnedPath> {
             let mut world = round.scenario.clone();
             world.obstacles.extend_from_slice(round.added_obstacles);
             let arg = Bound::new(py, PyScenario::new(world))?;
@@ -193,7 +193,7 @@ impl PathLearner for PyLearner<'_> {
             learned_of(py, &ret, t0)
         });
         match outcome {
-            Ok(r) => r,
+            Ok(r) => Ok(r),
             Err(e) => {
                 let mut slot = self.error.lock().unwrap_or_else(|p| p.into_inner());
                 slot.get_or_insert(e);
@@ -209,11 +209,7 @@ impl PathLearner for PyLearner<'_> {
 
 /// A Python learner's return value: a list of cells, `None`, or a dict with `path` and
 /// optional `total_steps`, `converged_episode`, `length_converged_episode`, `wall_time_s`.
-fn learned_of(
-    py: Python<'_>,
-    ret: &Bound<'_, PyAny>,
-    t0: Instant,
-) -> PyResult<CoreResult<LearnedPath>> {
+fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<LearnedPath> {
     let mut out = LearnedPath::default();
     let path_obj = if let Ok(d) = ret.cast::<PyDict>() {
         for (k, v) in d.iter() {
@@ -223,15 +219,15 @@ fn learned_of(
                 "path" => {}
                 "total_steps" => {
                     out.total_steps =
-                        int_kw(py, (&field, 0, u64::MAX as i128), Some(&v))?.map_or(0, |v| v as u64)
+                        int_in(py, (&field, 0, u64::MAX as i128), Some(&v))?.map_or(0, |v| v as u64)
                 }
                 "converged_episode" => {
                     out.converged_episode =
-                        int_kw(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
+                        int_in(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
                 }
                 "length_converged_episode" => {
                     out.length_converged_episode =
-                        int_kw(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
+                        int_in(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
                 }
                 "wall_time_s" => out.wall_time_s = v.extract()?,
                 _ => {}
@@ -265,7 +261,7 @@ fn learned_of(
             .collect::<PyResult<Vec<Cell>>>()?;
         out.path = Some(cells);
     }
-    Ok(Ok(out))
+    Ok(out)
 }
 
 /// Run Algorithm 2 on a scenario: learn a terminal path, plan the arm's poses along it
@@ -418,10 +414,9 @@ pub fn generate_scenario(
     max_attempts: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyScenario> {
     let mut opts = GeneratorOptions::default();
-    let seed = int_kw(py, SEED, Some(seed))?
-        .ok_or_else(|| invalid_argument(py, "seed", "None", "must be an integer >= 0"))?
-        .try_into()
-        .map_err(|_| invalid_argument(py, "seed", repr(seed), int_domain(SEED.1, SEED.2)))?;
+    let seed = int_in(py, SEED, Some(seed))?
+        .ok_or_else(|| invalid_argument(py, "seed", "None", int_domain(SEED.1, SEED.2)))?
+        as u64;
     opts.density = finite(py, "density", density)?;
     if let Some(b) = bounds.filter(|b| !b.is_none()) {
         opts.bounds = bounds_arg(py, b)?;
@@ -430,10 +425,9 @@ pub fn generate_scenario(
         finite(py, "min_start_target_distance", min_start_target_distance)?;
     opts.require_arm_reachable = require_arm_reachable;
     opts.template = template.to_string();
-    if let Some(m) = int_kw(py, ("max_attempts", 1, u32::MAX as i128), max_attempts)? {
-        opts.max_attempts = u32::try_from(m).map_err(|_| {
-            invalid_argument(py, "max_attempts", m, int_domain(1, u32::MAX as i128))
-        })?;
+    let attempts = ("max_attempts", 1, u32::MAX as i128);
+    if let Some(m) = int_in(py, attempts, max_attempts)? {
+        opts.max_attempts = m as u32;
     }
     let s = run(py, || generate(&opts, seed))?;
     Ok(PyScenario::new(s))

@@ -4,7 +4,7 @@
 
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyInt};
-use sixaxis_core::request::{int_domain, TrainRequest, EPISODES, MAX_STEPS, SEED};
+use sixaxis_core::request::{in_domain, int_domain, TrainRequest, EPISODES, MAX_STEPS, SEED};
 
 use crate::convert::repr;
 use crate::errors::invalid_argument;
@@ -44,7 +44,7 @@ pub fn bool_kw(
     let is_numpy_bool = o
         .get_type()
         .name()
-        .map(|n| n.to_string() == "bool" || n.to_string() == "bool_")
+        .map(|n| n == "bool" || n == "bool_")
         .unwrap_or(false);
     if o.is_instance_of::<PyBool>() || is_numpy_bool {
         return o.is_truthy().map(Some);
@@ -76,4 +76,15 @@ pub fn train_request(
         distance: bool_kw(py, "distance", distance)?,
         max_steps_per_episode: int_kw(py, MAX_STEPS, max_steps_per_episode)?,
     })
+}
+
+/// [`int_kw`], then checked against its domain (for keywords no core request resolves).
+pub fn int_in(
+    py: Python<'_>,
+    domain: (&str, i128, i128),
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<i128>> {
+    int_kw(py, domain, obj)?
+        .map(|v| crate::errors::run_attached(py, || in_domain(domain, v)))
+        .transpose()
 }
