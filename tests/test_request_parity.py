@@ -157,3 +157,11 @@ def test_python_only_values_rejected_alike(command, kwargs, name):
 def test_keyword_only_after_scenario(command):
     with pytest.raises(TypeError):
         getattr(sa, command)(SCENARIO, 0)
+
+
+def test_plan_learner_flag_matches_keyword(sixaxis_bin):
+    proc = cli(sixaxis_bin, "plan", ["--learner", "bfs", "--max-replans", "3"])
+    assert proc.returncode in (0, 1), proc.stderr
+    p = sa.plan(SCENARIO, learner="bfs", max_replans=3)
+    assert untimed(json.loads(proc.stdout)) == untimed(p.to_dict())
+    assert all(r["total_steps"] == 0 for r in p.rounds)

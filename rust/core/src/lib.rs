@@ -13,10 +13,19 @@
 //! - [`ik`] — closed-form inverse kinematics, every solution (up to 8).
 //! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
 //! - [`planner`] — pose planning over a terminal path (Algorithm 1).
-//! - [`replanning`] — the integrated loop with re-planning (Algorithm 2).
+//! - [`replanning`] — the integrated loop with re-planning (Algorithm 2) over any
+//!   [`PathLearner`] (tabular Q-learning by default, BFS, or your own).
+//! - [`request`] — training and planning requests: the one place that checks the
+//!   options of a run and fills their defaults (the CLI and the bindings map onto it).
 //! - [`generator`] — random cluttered scenarios for benchmarks.
+//! - [`names`] — scenario names: files, built-ins, `generated:SEED`, `generated:A..B` lists.
 //! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
-//! - [`error`] — the one error type; [`io`] — atomic file output.
+//! - [`error`] — the one error type; [`io`] — atomic file output; [`host`] — the
+//!   machine description of reports.
+//!
+//! Layers, bottom up, without cycles: `scenario` (with `kinematics` and `ik` for its arm);
+//! `grid`; `qlearning`; `clearance`; `planner`; `replanning`, `request`; `generator`;
+//! `names`.
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 //!
