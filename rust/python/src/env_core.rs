@@ -37,21 +37,14 @@ fn obs_kind(py: Python<'_>, obs: &str) -> PyResult<ObsKind> {
     }
 }
 
+/// `assist=None|bool` as the core's training request resolves it (None: the scenario's
+/// `learning.assist_*` flags).
 fn assist_of(py: Python<'_>, assist: Option<&Bound<'_, PyAny>>, s: &Scenario) -> PyResult<Assist> {
-    match assist {
-        None => Ok(Assist::from_scenario(s)),
-        Some(a) if a.is_none() => Ok(Assist::from_scenario(s)),
-        Some(a) => match a.extract::<bool>() {
-            Ok(true) => Ok(Assist::on()),
-            Ok(false) => Ok(Assist::off()),
-            Err(_) => Err(invalid_argument(
-                py,
-                "assist",
-                repr(a),
-                "must be True, False or None (the scenario's learning.assist_* flags)",
-            )),
-        },
-    }
+    let req = sixaxis_core::request::TrainRequest {
+        assist: crate::request::bool_kw(py, "assist", assist)?,
+        ..Default::default()
+    };
+    Ok(run_attached(py, || req.resolve(s))?.assist)
 }
 
 #[allow(clippy::too_many_arguments)]
