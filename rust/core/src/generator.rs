@@ -6,8 +6,8 @@
 //!   and, by default, both reachable by a clear arm pose; beta_0 is the clearest pose at the
 //!   start.
 //! - [`benchmark_scenario`] — member `i` of the fixed benchmark set, also reachable as the
-//!   scenario name `generated:i` ([`crate::scenario::Scenario::load`]).
-//! - [`expand_names`] — `generated:0..9` and comma lists to scenario names.
+//!   scenario name `generated:i` ([`crate::scenario::Scenario::load`], in
+//!   [`crate::names`], which also expands `generated:0..9` lists).
 //!
 //! ```
 //! use sixaxis_core::generator::{generate, GeneratorOptions};
