@@ -88,3 +88,32 @@ pub fn free_cells(s: &Scenario) -> Vec<Cell> {
     }
     out
 }
+
+/// Exact distance (mm) from the polyline `points` (mm) to the nearest obstacle cube (edge
+/// `cell_mm`, on its cell), without parry: the distance from a point to a box is closed form,
+/// and along a segment it is convex, so a ternary search finds its minimum.
+pub fn naive_cube_distance_mm(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> f64 {
+    let h = cell_mm / 2.0;
+    let point_box = |p: Vector3<f64>, c: Vector3<f64>| {
+        let d = (p - c).abs().map(|x| (x - h).max(0.0));
+        d.norm()
+    };
+    let mut m = f64::INFINITY;
+    for w in points.windows(2) {
+        for &o in obstacles {
+            let c = centre(o, cell_mm);
+            let at = |t: f64| point_box(w[0] + (w[1] - w[0]) * t, c);
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for _ in 0..200 {
+                let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+                if at(a) <= at(b) {
+                    hi = b;
+                } else {
+                    lo = a;
+                }
+            }
+            m = m.min(at(0.5 * (lo + hi))).min(at(0.0)).min(at(1.0));
+        }
+    }
+    m
+}
