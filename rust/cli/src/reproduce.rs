@@ -159,9 +159,15 @@ fn learn_condition(
 
 /// The modes compared, by key: (key, what it is).
 const MODES: [(&str, &str); 3] = [
-    ("paper", "greedy first fit, n_d doubles on every re-plan (Algorithm 1 as written)"),
+    (
+        "paper",
+        "greedy first fit, n_d doubles on every re-plan (Algorithm 1 as written)",
+    ),
     ("backtracking", "backtracking search, n_d fixed (ours)"),
-    ("fixed_nd", "greedy first fit, n_d fixed (the paper without its n_d change)"),
+    (
+        "fixed_nd",
+        "greedy first fit, n_d fixed (the paper without its n_d change)",
+    ),
 ];
 
 /// The scenario with its planning set to mode `key` of [`MODES`]. The paper mode keeps the
@@ -444,13 +450,19 @@ fn mode_cell(m: &Value) -> String {
 
 /// The pose-planning sections of the report: the three modes side by side, per seed.
 fn plan_sections(r: &mut String, result: &Value) {
-    let _ = writeln!(r, "\n## Pose planning and re-planning (Algorithm 2, with assistance)\n");
+    let _ = writeln!(
+        r,
+        "\n## Pose planning and re-planning (Algorithm 2, with assistance)\n"
+    );
     let _ = writeln!(r, "The paper needed no re-plan in the simple case and one in the complex case (Table 3, Fig. 9). Each scenario and seed is planned in three modes (`planning.mode` and the n_d rule, docs/SCENARIOS.md):\n");
     for (key, what) in MODES {
         let _ = writeln!(r, "- **{key}**: {what}.");
     }
     let _ = writeln!(r, "\nIn every cell: ✓ success or ✗ failure, re-plans, the points recorded as new obstacles, n_d of each pass, the learned path's length (steps) in each pass, and the two clearance figures of the final motion over every interpolation step: eq. 11's smallest distance from an obstacle *centre* to the arm's centre line (cells; must exceed d_p) and the exact smallest distance from the centre line to an obstacle *cube* (mm, parry3d). A failed run has no final motion (—).\n");
-    let _ = writeln!(r, "| scenario | default mode | mode | succeeded | re-plans per seed | mean wall time (s) |");
+    let _ = writeln!(
+        r,
+        "| scenario | default mode | mode | succeeded | re-plans per seed | mean wall time (s) |"
+    );
     let _ = writeln!(r, "|---|---|---|---|---|---|");
     for s in result["scenarios"].as_array().into_iter().flatten() {
         let plans = s["plans"].as_array().cloned().unwrap_or_default();
@@ -460,11 +472,18 @@ fn plan_sections(r: &mut String, result: &Value) {
             let replans: Vec<String> = runs
                 .iter()
                 .map(|m| {
-                    let mark = if m["success"] == json!(true) { "" } else { "✗" };
+                    let mark = if m["success"] == json!(true) {
+                        ""
+                    } else {
+                        "✗"
+                    };
                     format!("{mark}{}", m["replans"])
                 })
                 .collect();
-            let times: Vec<f64> = runs.iter().filter_map(|m| m["wall_time_s"].as_f64()).collect();
+            let times: Vec<f64> = runs
+                .iter()
+                .filter_map(|m| m["wall_time_s"].as_f64())
+                .collect();
             let _ = writeln!(
                 r,
                 "| {} | {} | {key} | {ok}/{} | {} | {:.2} |",
@@ -478,7 +497,11 @@ fn plan_sections(r: &mut String, result: &Value) {
     }
     for s in result["scenarios"].as_array().into_iter().flatten() {
         let name = s["name"].as_str().unwrap_or("?");
-        let _ = writeln!(r, "\n### {name} (d_p = {} cells), per seed\n", s["arm_safe_distance"]);
+        let _ = writeln!(
+            r,
+            "\n### {name} (d_p = {} cells), per seed\n",
+            s["arm_safe_distance"]
+        );
         let _ = writeln!(r, "| seed | paper | backtracking | fixed n_d |");
         let _ = writeln!(r, "|---|---|---|---|");
         for p in s["plans"].as_array().into_iter().flatten() {

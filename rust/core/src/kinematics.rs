@@ -360,7 +360,10 @@ mod tests {
                         let rpy = [ix as f64 * step, iy as f64 * step, iz as f64 * step];
                         let rotation = rotation_from_rpy_deg(rpy);
                         if !brute.iter().any(|o| (o.rotation - rotation).amax() < 1e-9) {
-                            brute.push(Orientation { rpy_deg: rpy, rotation });
+                            brute.push(Orientation {
+                                rpy_deg: rpy,
+                                rotation,
+                            });
                         }
                     }
                 }

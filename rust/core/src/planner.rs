@@ -447,7 +447,9 @@ impl PosePlanner {
         let first = poses.first()?;
         let mut steps = vec![*first];
         for w in poses.windows(2) {
-            steps.extend((1..=self.steps).map(|k| interpolate(&w[0], &w[1], k as f64 / self.steps as f64)));
+            steps.extend(
+                (1..=self.steps).map(|k| interpolate(&w[0], &w[1], k as f64 / self.steps as f64)),
+            );
         }
         let mut m = MotionClearance {
             min_centre_clearance_cells: f64::INFINITY,

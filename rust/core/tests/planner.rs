@@ -266,7 +266,11 @@ fn nd_rule_doubles_on_each_replan_and_grids_nest() {
     let cap = s.planning.orientation_divisions_max;
     for k in 0..6u32 {
         let want = (8u32 << k).min(cap);
-        assert_eq!(s.planning.orientation_divisions_for_round(k), want, "pass {k}");
+        assert_eq!(
+            s.planning.orientation_divisions_for_round(k),
+            want,
+            "pass {k}"
+        );
         if want <= 32 {
             let p = PosePlanner::for_round(&s, k);
             assert_eq!(p.orientation_divisions(), want);
@@ -309,15 +313,24 @@ fn motion_clearance_figures_match_naive_loops() {
         for k in 0..=t {
             let pts = arm.points_mm(&interpolate(&w[0], &w[1], k as f64 / t as f64));
             centre_min = centre_min.min(naive_clearance(&pts, &s.obstacles, s.cell_mm));
-            cube_min = cube_min.min(common::naive_cube_distance_mm(&pts, &s.obstacles, s.cell_mm));
+            cube_min = cube_min.min(common::naive_cube_distance_mm(
+                &pts,
+                &s.obstacles,
+                s.cell_mm,
+            ));
         }
     }
     assert!((m.min_centre_clearance_cells - centre_min).abs() < 1e-12);
-    assert!((m.min_cube_distance_mm - cube_min).abs() < 1e-6, "{m:?} vs {cube_min}");
+    assert!(
+        (m.min_cube_distance_mm - cube_min).abs() < 1e-6,
+        "{m:?} vs {cube_min}"
+    );
     // A cube lies within its circumscribed ball: the cube distance is at least the centre
     // distance minus half a diagonal, and at most it minus half an edge.
     let h = s.cell_mm / 2.0;
-    assert!(m.min_cube_distance_mm >= m.min_centre_clearance_cells * s.cell_mm - h * 3f64.sqrt() - 1e-9);
+    assert!(
+        m.min_cube_distance_mm >= m.min_centre_clearance_cells * s.cell_mm - h * 3f64.sqrt() - 1e-9
+    );
     assert!(m.min_cube_distance_mm <= m.min_centre_clearance_cells * s.cell_mm - h + 1e-9);
     assert_eq!(planner.motion_clearance(&[]), None);
 }

@@ -224,11 +224,17 @@ fn planning_mode_and_nd_rule_are_validated() {
     let mut v = base();
     v["planning"]["orientation_divisions_growth"] = json!(1);
     v["planning"]["orientation_divisions_max"] = json!(48);
-    assert!(parse(&v).is_ok(), "with n_d fixed the cap only has to be >= n_d");
+    assert!(
+        parse(&v).is_ok(),
+        "with n_d fixed the cap only has to be >= n_d"
+    );
     let mut v = base();
     v["planning"]["mode"] = json!("greedy");
     let e = parse(&v).unwrap_err().to_string();
-    assert!(e.contains("greedy") && e.contains("paper") && e.contains("backtracking"), "{e}");
+    assert!(
+        e.contains("greedy") && e.contains("paper") && e.contains("backtracking"),
+        "{e}"
+    );
     for mode in ["paper", "backtracking"] {
         let mut v = base();
         v["planning"]["mode"] = json!(mode);

@@ -23,8 +23,19 @@ pub fn naive_clearance(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> 
     m
 }
 
-/// Every check of a plan, independent of the planner.
+/// Every check of a plan, independent of the planner, on the first pass's orientation grid.
 pub fn check_poses(s: &Scenario, path: &[Cell], poses: &[sixaxis_core::planner::PosePoint]) {
+    check_poses_nd(s, path, poses, s.planning.orientation_divisions);
+}
+
+/// [`check_poses`] for a pass whose orientation grid has `n_d` divisions.
+pub fn check_poses_nd(
+    s: &Scenario,
+    path: &[Cell],
+    poses: &[sixaxis_core::planner::PosePoint],
+    n_d: u32,
+) {
+    let grid_step_deg = 360.0 / n_d as f64;
     let arm = s.arm();
     let clearance = Clearance::from_scenario(s);
     let steps = s.planning.interpolation_steps;
@@ -41,7 +52,11 @@ pub fn check_poses(s: &Scenario, path: &[Cell], poses: &[sixaxis_core::planner::
             let want = rotation_from_rpy_deg(p.orientation_rpy_deg);
             assert!((fk.rotation - want).amax() < 1e-9, "pose {i}: orientation");
             for a in p.orientation_rpy_deg {
-                assert_eq!(a % 45.0, 0.0, "pose {i}: rpy on the 45-degree grid");
+                assert_eq!(
+                    a % grid_step_deg,
+                    0.0,
+                    "pose {i}: rpy on the n_d = {n_d} grid"
+                );
             }
             for q in p.joints_rad {
                 assert!(q > -std::f64::consts::PI && q <= std::f64::consts::PI);
