@@ -139,6 +139,11 @@ def fig_path(s, path, dpi):
     frame_scene(ax, s)
     if first:
         draw_path(ax, first, "tab:blue", f"first learned path ({len(first) - 1} steps)")
+    blocked = rounds[0].get("blocked_at") if rounds else None
+    if blocked:
+        ax.scatter(
+            *blocked[1], color="tab:red", marker="X", s=120, depthshade=False, label="dead end"
+        )
     nd = rounds[0]["orientation_divisions"] if rounds else "?"
     fig_no = "Fig. 7" if replanned else "Fig. 4"
     ax.set_title(f"{s['name']}: first path, n_d = {nd} ({fig_no})")
@@ -148,6 +153,8 @@ def fig_path(s, path, dpi):
         frame_scene(ax, s)
         draw_path(ax, plan["path"], "tab:green", f"re-planned path ({len(plan['path']) - 1} steps)")
         draw_cubes(ax, plan["added_obstacles"], "tab:red", alpha=0.5, size=0.6)
+        for c in plan["added_obstacles"]:
+            ax.scatter(*c, color="tab:red", marker="X", s=120, depthshade=False)
         status = "ok" if plan["success"] else "FAILED"
         nds = ", ".join(str(r["orientation_divisions"]) for r in rounds)
         ax.set_title(
