@@ -250,3 +250,21 @@ def test_paper_complex_paper_mode_result_keys_and_clearances():
     assert cube - r.min_cube_distance_mm < 1.1
     failed = sa.plan("paper_complex", seed=0, max_replans=0)
     assert failed.min_cube_distance_mm is None and failed.min_centre_clearance_cells is None
+
+
+def test_pose_planner_round_follows_the_nd_rule():
+    s = sa.Scenario("paper_complex")
+    assert [sa.PosePlanner(s, round=k).orientation_divisions for k in range(5)] == [
+        8,
+        16,
+        32,
+        64,
+        64,
+    ]
+    fixed = sa.Scenario("replan_clutter")
+    assert sa.PosePlanner(fixed, round=3).orientation_divisions == 8
+    d = json.loads(s.to_json())
+    d["planning"]["orientation_divisions_max"] = 48
+    with pytest.raises(sa.ScenarioError) as e:
+        sa.Scenario.from_json(json.dumps(d))
+    assert e.value.field == "planning.orientation_divisions_max" and e.value.value == "48"
