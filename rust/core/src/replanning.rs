@@ -9,8 +9,9 @@
 //! Each round learns a path from scratch (a fresh Q-table) on the scenario's obstacles plus
 //! every point added so far, then runs Algorithm 1 ([`crate::planner::PosePlanner`]) from
 //! beta_0, in the scenario's `planning.mode`, with the orientation grid of round k's n_d
-//! (`planning.orientation_divisions_for_round(k)`: the paper's "change n_d" on a re-plan). A blocked point is added as an obstacle for the terminal only: the arm's
-//! clearance is always measured against the scenario's own obstacles.
+//! (`planning.orientation_divisions_for_round(k)`: the paper's "change n_d" on a re-plan).
+//! A blocked point is added as an obstacle for the terminal only: the arm's clearance is
+//! always measured against the scenario's own obstacles.
 //!
 //! Where the blocked point is the target itself (no clear motion reaches any pose there
 //! from the pose at the point before), the point before is recorded instead, so that the
