@@ -1,8 +1,8 @@
 """Draw the paper's figures from `sixaxis reproduce`'s JSON.
 
 Per scenario: steps per episode with and without assisted learning (Figs. 5 and 8), the
-terminal path among the obstacles, first and re-planned (Figs. 4, 7 and 9), and the arm's
-poses along the final path (Figs. 6 and 10). PNGs go to --out-dir and are copied to
+terminal path among the obstacles, first and re-planned side by side (Figs. 4, 7 and 9),
+and the arm's poses along the final path (Figs. 6 and 10). PNGs go to --out-dir and are copied to
 --docs-dir.
 
     python scripts/reproduce_figures.py --results results/reproduce/reproduction.json
@@ -121,38 +121,48 @@ def fig_steps(s, smooth, path, dpi):
     plt.close(fig)
 
 
+def draw_path(ax, p, color, label, ls="-"):
+    p = np.asarray(p)
+    ax.plot(p[:, 0], p[:, 1], p[:, 2], color=color, lw=2, ls=ls, label=label)
+
+
 def fig_path(s, path, dpi):
+    """The first learned path (paper Fig. 7) and, after a re-plan, the re-planned path with
+    the recorded points (paper Fig. 9), side by side."""
     plan = s["plans"][0]["result"]
-    fig = plt.figure(figsize=(6, 6))
-    ax = fig.add_subplot(projection="3d")
-    frame_scene(ax, s)
     rounds = plan["rounds"]
     first = rounds[0]["path"] if rounds and rounds[0]["path"] else None
+    replanned = plan["replans"] > 0 and plan["path"]
+    panels = 2 if replanned else 1
+    fig = plt.figure(figsize=(6 * panels, 6))
+    ax = fig.add_subplot(1, panels, 1, projection="3d")
+    frame_scene(ax, s)
     if first:
-        p = np.asarray(first)
-        ax.plot(
-            p[:, 0],
-            p[:, 1],
-            p[:, 2],
-            color="tab:blue",
-            lw=2,
-            label="first learned path",
+        draw_path(ax, first, "tab:blue", f"first learned path ({len(first) - 1} steps)")
+    blocked = rounds[0].get("blocked_at") if rounds else None
+    if blocked:
+        ax.scatter(
+            *blocked[1], color="tab:red", marker="X", s=120, depthshade=False, label="dead end"
         )
-    if plan["replans"] > 0 and plan["path"]:
-        p = np.asarray(plan["path"])
-        ax.plot(
-            p[:, 0],
-            p[:, 1],
-            p[:, 2],
-            color="tab:green",
-            lw=2,
-            ls="--",
-            label="re-planned path",
-        )
-        draw_cubes(ax, plan["added_obstacles"], "tab:red", alpha=0.5, size=0.6)
-    status = "ok" if plan["success"] else "FAILED"
-    ax.set_title(f"{s['name']}: terminal path (seed 0, {plan['replans']} re-plans, {status})")
+    nd = rounds[0]["orientation_divisions"] if rounds else "?"
+    fig_no = "Fig. 7" if replanned else "Fig. 4"
+    ax.set_title(f"{s['name']}: first path, n_d = {nd} ({fig_no})")
     ax.legend(loc="upper left")
+    if replanned:
+        ax = fig.add_subplot(1, 2, 2, projection="3d")
+        frame_scene(ax, s)
+        draw_path(ax, plan["path"], "tab:green", f"re-planned path ({len(plan['path']) - 1} steps)")
+        draw_cubes(ax, plan["added_obstacles"], "tab:red", alpha=0.5, size=0.6)
+        for c in plan["added_obstacles"]:
+            ax.scatter(*c, color="tab:red", marker="X", s=120, depthshade=False)
+        status = "ok" if plan["success"] else "FAILED"
+        nds = ", ".join(str(r["orientation_divisions"]) for r in rounds)
+        ax.set_title(
+            f"after {plan['replans']} re-plan(s), n_d = {nds}: {status} (Fig. 9)\n"
+            "red: points recorded as obstacles"
+        )
+        ax.legend(loc="upper left")
+    fig.suptitle(f"seed 0, mode {rounds[-1]['mode'] if rounds else '?'}")
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
@@ -180,7 +190,8 @@ def fig_poses(s, path, dpi):
             lw=1,
             ls=":",
         )
-    ax.set_title(f"{s['name']}: arm poses along the path ({n} poses, seed 0)")
+    fig_no = "Fig. 10" if plan["result"]["replans"] > 0 else "Fig. 6"
+    ax.set_title(f"{s['name']}: the arm's motion, {n} poses (seed 0, {fig_no})")
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     plt.close(fig)

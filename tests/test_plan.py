@@ -283,3 +283,69 @@ def test_plan_python_learner_errors():
         sa.plan(s, learner=3)
     with pytest.raises(sa.InvalidArgumentError, match="must return a list"):
         sa.plan(s, learner=lambda world, seed: 5)
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    """Angles wrapped to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - a, 2 * np.pi)
+
+
+def polyline_cube_distance_mm(points: np.ndarray, obstacles, cell_mm: float, samples: int):
+    """Distance from a polyline (mm) to the nearest obstacle cube, sampled along each segment:
+    at least the exact distance, and above it by at most half a sample spacing."""
+    t = np.linspace(0.0, 1.0, samples)[:, None]
+    pts = np.concatenate([a + (b - a) * t for a, b in zip(points[:-1], points[1:])])
+    centres = np.asarray(obstacles, dtype=float) * cell_mm
+    d = np.maximum(np.abs(pts[:, None, :] - centres[None, :, :]) - cell_mm / 2, 0.0)
+    return float(np.linalg.norm(d, axis=2).min())
+
+
+def test_paper_complex_paper_mode_result_keys_and_clearances():
+    """Table 3 in the paper mode: one re-plan, n_d 8 then 16; both clearance figures of the
+    final motion re-checked here over every interpolation step."""
+    r = sa.plan("paper_complex", seed=0)
+    assert r.success and r.replans == 1 and r.added_obstacles == [(0, 2, 0)]
+    assert [rd["orientation_divisions"] for rd in r.rounds] == [8, 16]
+    assert [rd["mode"] for rd in r.rounds] == ["paper", "paper"]
+    d = r.to_dict()
+    assert d["min_centre_clearance_cells"] == r.min_centre_clearance_cells
+    assert d["min_cube_distance_mm"] == r.min_cube_distance_mm
+    arm = sa.Arm.from_scenario(sa.Scenario("paper_complex"))
+    centre, cube = math.inf, math.inf
+    samples = 150
+    steps = r.interpolation_steps
+    for q0, q1 in zip(r.poses_rad[:-1], r.poses_rad[1:]):
+        for k in range(steps + 1):
+            q = wrap(q0 + wrap(q1 - q0) * k / steps)
+            pts = np.asarray(arm.points_mm(q))
+            for a, b in zip(pts[:-1], pts[1:]):
+                for o in r.obstacles:
+                    c = np.asarray(o, dtype=float) * r.cell_mm
+                    w = np.clip(np.dot(c - a, b - a) / max(np.dot(b - a, b - a), 1e-300), 0, 1)
+                    centre = min(centre, float(np.linalg.norm(a + w * (b - a) - c)) / r.cell_mm)
+            cube = min(cube, polyline_cube_distance_mm(pts, r.obstacles, r.cell_mm, samples))
+    assert r.min_centre_clearance_cells == pytest.approx(centre, abs=1e-9)
+    assert r.min_centre_clearance_cells > r.arm_safe_distance
+    # Longest link 300 mm: samples every 300 / 149 mm, so at most ~1 mm above the exact value.
+    assert r.min_cube_distance_mm <= cube + 1e-9
+    assert cube - r.min_cube_distance_mm < 1.1
+    failed = sa.plan("paper_complex", seed=0, max_replans=0)
+    assert failed.min_cube_distance_mm is None and failed.min_centre_clearance_cells is None
+
+
+def test_pose_planner_round_follows_the_nd_rule():
+    s = sa.Scenario("paper_complex")
+    assert [sa.PosePlanner(s, round=k).orientation_divisions for k in range(5)] == [
+        8,
+        16,
+        32,
+        64,
+        64,
+    ]
+    fixed = sa.Scenario("replan_clutter")
+    assert sa.PosePlanner(fixed, round=3).orientation_divisions == 8
+    d = json.loads(s.to_json())
+    d["planning"]["orientation_divisions_max"] = 48
+    with pytest.raises(sa.ScenarioError) as e:
+        sa.Scenario.from_json(json.dumps(d))
+    assert e.value.field == "planning.orientation_divisions_max" and e.value.value == "48"

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::grid::GridWorld;
 use crate::planner::PosePlanner;
-use crate::scenario::{Bounds, Cell, Scenario};
+use crate::scenario::{Bounds, Cell, PoseSearchMode, Scenario};
 
 /// Prefix of generated scenario names: `generated:SEED`.
 pub const GENERATED_PREFIX: &str = "generated:";
@@ -45,6 +45,11 @@ pub struct GeneratorOptions {
     /// Every other field (rewards, learning, arm, safe distances, planning) comes from this
     /// scenario: a built-in name or a file ([`Scenario::open`]).
     pub template: String,
+    /// Pose search of the generated scenarios: `Some((mode, n_d growth))` replaces the
+    /// template's `planning.mode` and `planning.orientation_divisions_growth`; `None` keeps
+    /// them. Default: backtracking with n_d fixed, which needed the fewest re-plans on the
+    /// generated set (docs/SCENARIOS.md).
+    pub pose_search: Option<(PoseSearchMode, u32)>,
 }
 
 impl Default for GeneratorOptions {
@@ -59,6 +64,7 @@ impl Default for GeneratorOptions {
             require_arm_reachable: true,
             max_attempts: 200,
             template: "paper_simple".into(),
+            pose_search: Some((PoseSearchMode::Backtracking, 1)),
         }
     }
 }
@@ -133,6 +139,10 @@ pub fn generate(opts: &GeneratorOptions, seed: u64) -> Result<Scenario> {
         pool.truncate(n_obstacles);
         pool.sort();
         let mut s = template.clone();
+        if let Some((mode, growth)) = opts.pose_search {
+            s.planning.mode = mode;
+            s.planning.orientation_divisions_growth = growth;
+        }
         s.name = format!("{GENERATED_PREFIX}{seed}");
         s.notes = format!(
             "Generated (seed {seed}, attempt {attempt}): density {}, bounds {:?}..{:?}, template {}; start and target connected (BFS){}; beta_0 is the clearest arm pose at the start.",

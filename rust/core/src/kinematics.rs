@@ -239,27 +239,54 @@ pub fn rotation_from_rpy_deg(rpy_deg: [f64; 3]) -> Matrix3<f64> {
 }
 
 /// The paper's orientation grid: rt_x, rt_y, rt_z in {0, 360/n_d, ...} degrees,
-/// `R = Rz(rt_z) Ry(rt_y) Rx(rt_x)`, with rotations that equal an earlier one
-/// (within 1e-9) removed. For n_d = 8 that leaves 208 of the 512 triples.
+/// `R = Rz(rt_z) Ry(rt_y) Rx(rt_x)`, with rotations that equal an earlier one (in the loop
+/// order rt_x, rt_y, rt_z) removed. For n_d = 8 that leaves 208 of the 512 triples; 1824 for
+/// n_d = 16, 15424 for 32, 127104 for 64. The grid of `k * n_d` contains every rotation of
+/// the grid of `n_d`.
+///
+/// Duplicates are found exactly on the integer grid indices, in O(n_d³): with `h = n_d / 2`,
+/// `(i_x, i_y, i_z)` and `(i_x + h, h - i_y, i_z + h)` (mod n_d) give the same rotation
+/// (n_d even), and at rt_y = ±90° (n_d a multiple of 4) the rotation depends only on
+/// `i_z ∓ i_x`; no other two triples coincide.
 pub fn orientation_grid(divisions: u32) -> Vec<Orientation> {
     let n = divisions.max(1);
     let step = 360.0 / n as f64;
+    let mut seen = std::collections::HashSet::new();
     let mut out: Vec<Orientation> = Vec::new();
     for ix in 0..n {
         for iy in 0..n {
             for iz in 0..n {
-                let rpy = [ix as f64 * step, iy as f64 * step, iz as f64 * step];
-                let rot = rotation_from_rpy_deg(rpy);
-                if !out.iter().any(|o| (o.rotation - rot).amax() < 1e-9) {
-                    out.push(Orientation {
-                        rpy_deg: rpy,
-                        rotation: rot,
-                    });
+                if !seen.insert(grid_rotation_key(n, ix, iy, iz)) {
+                    continue;
                 }
+                let rpy = [ix as f64 * step, iy as f64 * step, iz as f64 * step];
+                out.push(Orientation {
+                    rpy_deg: rpy,
+                    rotation: rotation_from_rpy_deg(rpy),
+                });
             }
         }
     }
     out
+}
+
+/// A key equal for two index triples of the n-division grid exactly when their rotations
+/// are equal (see [`orientation_grid`]).
+fn grid_rotation_key(n: u32, ix: u32, iy: u32, iz: u32) -> (u8, u32, u32, u32) {
+    if n % 4 == 0 && iy == n / 4 {
+        // rt_y = +90°: Rz(c) Ry(90°) Rx(a) depends on c - a.
+        return (1, (iz + n - ix) % n, 0, 0);
+    }
+    if n % 4 == 0 && iy == 3 * n / 4 {
+        // rt_y = -90°: depends on c + a.
+        return (2, (iz + ix) % n, 0, 0);
+    }
+    if n % 2 == 0 {
+        let h = n / 2;
+        let twin = ((ix + h) % n, (h + n - iy) % n, (iz + h) % n);
+        return (0, ix, iy, iz).min((0, twin.0, twin.1, twin.2));
+    }
+    (0, ix, iy, iz)
 }
 
 /// Angle wrapped to (-pi, pi].
@@ -318,5 +345,36 @@ mod tests {
         assert_eq!(wrap_angle(PI), PI);
         assert!((wrap_angle(-PI) - PI).abs() < 1e-12);
         assert!((wrap_angle(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-12);
+    }
+
+    /// The exact index dedupe keeps the same orientations, in the same order, as comparing
+    /// every rotation with every earlier one (within 1e-9).
+    #[test]
+    fn orientation_grid_matches_brute_force_dedupe() {
+        for n in 1..=16 {
+            let step = 360.0 / n as f64;
+            let mut brute: Vec<Orientation> = Vec::new();
+            for ix in 0..n {
+                for iy in 0..n {
+                    for iz in 0..n {
+                        let rpy = [ix as f64 * step, iy as f64 * step, iz as f64 * step];
+                        let rotation = rotation_from_rpy_deg(rpy);
+                        if !brute.iter().any(|o| (o.rotation - rotation).amax() < 1e-9) {
+                            brute.push(Orientation {
+                                rpy_deg: rpy,
+                                rotation,
+                            });
+                        }
+                    }
+                }
+            }
+            let fast = orientation_grid(n);
+            assert_eq!(fast.len(), brute.len(), "n_d = {n}");
+            for (a, b) in fast.iter().zip(&brute) {
+                assert_eq!(a.rpy_deg, b.rpy_deg, "n_d = {n}");
+            }
+        }
+        assert_eq!(orientation_grid(8).len(), 208);
+        assert_eq!(orientation_grid(32).len(), 15424);
     }
 }

@@ -3,7 +3,9 @@
 //!
 //! Entry points:
 //! - [`PosePlanner::from_scenario`] — the scenario's arm, obstacles, clearance model,
-//!   orientation grid (eq. 12), interpolation steps `t` and joint limits.
+//!   orientation grid (eq. 12), interpolation steps `t`, joint limits and search mode.
+//! - [`PosePlanner::for_round`] — the same for pass k of Algorithm 2: the orientation grid
+//!   of n_d = `planning.orientation_divisions_for_round(k)` (the paper's "change n_d").
 //! - [`PosePlanner::plan_poses`] — Algorithm 1 over a path of cells: [`PosePlan::Complete`]
 //!   or [`PosePlan::Blocked`] at the first cell no pose reaches safely (Algorithm 2 then
 //!   makes that cell an obstacle and learns again; that loop lives elsewhere).
@@ -27,7 +29,12 @@
 //!    `k = 1..t-1` of the joint-space move from the current pose is not clear or breaks the
 //!    joint limits. The first survivor is recorded and becomes the current pose and
 //!    orientation.
-//! 4. If no orientation has a survivor, the plan is [`PosePlan::Blocked`] at that index.
+//! 4. If no orientation has a survivor, the plan is [`PosePlan::Blocked`] at that index
+//!    (mode `paper`, the paper's Algorithm 1); mode `backtracking` first goes back to earlier
+//!    points' next candidates (see [`PosePlanner::plan_poses`]).
+//!
+//! Candidates are generated lazily, one orientation's IK at a time, so a fine grid
+//! (n_d = 32 or 64: 15424 or 127104 orientations) costs only what the search visits.
 //!
 //! Joint limits (`arm.joint_limits_deg`, `[low, high]` degrees per joint): an angle in
 //! (-pi, pi] is within them when it, or it ± 360°, lies in `[low, high]`. Checking every
@@ -98,6 +105,17 @@ impl PosePlan {
     }
 }
 
+/// How close a planned motion comes to the obstacles, over every interpolation step
+/// (`k = 0..=t` of every move, so every pose included), measured two ways.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MotionClearance {
+    /// Eq. 11: smallest distance from an obstacle *centre* to the arm's polyline, cells.
+    pub min_centre_clearance_cells: f64,
+    /// Exact geometry (parry3d): smallest distance from the arm's polyline (its centre line)
+    /// to an obstacle *cube* (edge `cell_mm`, on its cell), mm; 0 on contact.
+    pub min_cube_distance_mm: f64,
+}
+
 /// Rotation angle (radians, in [0, pi]) between two rotations: the angle of `aᵀ b`.
 /// Uses `atan2(|vee(M - Mᵀ)|, tr M - 1)`, accurate near 0 and near pi alike.
 pub fn rotation_angle(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
@@ -145,6 +163,8 @@ pub struct PosePlanner {
     arm: Arm,
     clearance: Clearance,
     grid: Vec<Orientation>,
+    /// n_d of `grid`.
+    divisions: u32,
     steps: u32,
     cell_mm: f64,
     /// Joint limits, radians, `[low, high]` per joint.
@@ -154,19 +174,26 @@ pub struct PosePlanner {
 }
 
 impl PosePlanner {
-    /// The planner of a scenario: its arm, [`Clearance::from_scenario`], the orientation grid
-    /// of `planning.orientation_divisions`, `planning.interpolation_steps` and
-    /// `arm.joint_limits_deg`.
+    /// The planner of a scenario's first pass: its arm, [`Clearance::from_scenario`], the
+    /// orientation grid of `planning.orientation_divisions`, `planning.interpolation_steps`,
+    /// `arm.joint_limits_deg` and `planning.mode` (with its backtracking budget).
     pub fn from_scenario(s: &Scenario) -> PosePlanner {
+        PosePlanner::for_round(s, 0)
+    }
+
+    /// The planner of pass `round` of Algorithm 2 (0 = first pass, k = k-th re-plan): as
+    /// [`PosePlanner::from_scenario`], with the orientation grid of
+    /// n_d = [`Planning::orientation_divisions_for_round`](crate::scenario::Planning::orientation_divisions_for_round).
+    pub fn for_round(s: &Scenario, round: u32) -> PosePlanner {
         PosePlanner::new(
             s.arm(),
             Clearance::from_scenario(s),
-            s.planning.orientation_divisions,
+            s.planning.orientation_divisions_for_round(round),
             s.planning.interpolation_steps,
             s.cell_mm,
             s.arm.joint_limits_deg,
         )
-        .with_backtrack_budget(s.planning.backtrack_budget)
+        .with_backtrack_budget(s.planning.effective_backtrack_budget())
     }
 
     /// A planner from its parts: arm, clearance, orientation grid divisions n_d (eq. 12),
@@ -183,6 +210,7 @@ impl PosePlanner {
             arm,
             clearance,
             grid: orientation_grid(orientation_divisions),
+            divisions: orientation_divisions.max(1),
             steps: interpolation_steps.max(1),
             cell_mm,
             limits_rad: joint_limits_deg
@@ -218,6 +246,11 @@ impl PosePlanner {
     /// The orientation grid, in grid order.
     pub fn orientations(&self) -> &[Orientation] {
         &self.grid
+    }
+
+    /// n_d of the orientation grid (eq. 12).
+    pub fn orientation_divisions(&self) -> u32 {
+        self.divisions
     }
 
     /// Interpolation steps t between two poses.
@@ -287,29 +320,33 @@ impl PosePlanner {
     /// The candidates of Algorithm 1 at `cell` from pose `cur` with grid orientation
     /// `cur_orient`, in the order they are tried: orientations by growing angle from the
     /// current one, then IK solutions by joint distance from `cur`. Each is
-    /// `(orientation index, solution index, pose)`.
-    fn candidates(
-        &self,
-        cur: &Joints,
+    /// `(orientation index, solution index, pose)`; an orientation's IK is solved only when
+    /// the search reaches it.
+    fn candidates<'a>(
+        &'a self,
+        cur: &'a Joints,
         cur_orient: usize,
         cell: Cell,
-    ) -> Vec<(usize, usize, Joints)> {
+    ) -> impl Iterator<Item = (usize, usize, Joints)> + 'a {
         let position_mm = self.centre_mm(cell);
-        let mut out = Vec::new();
-        for o in self.orientation_order(cur_orient) {
-            let sols = self.arm.ik(&TerminalPose {
-                position_mm,
-                rotation: self.grid[o].rotation,
-            });
-            let mut order: Vec<(f64, usize)> = sols
-                .iter()
-                .enumerate()
-                .map(|(i, q)| (joint_distance(cur, q), i))
-                .collect();
-            order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            out.extend(order.into_iter().map(|(_, i)| (o, i, sols[i])));
-        }
-        out
+        self.orientation_order(cur_orient)
+            .into_iter()
+            .flat_map(move |o| {
+                let sols = self.arm.ik(&TerminalPose {
+                    position_mm,
+                    rotation: self.grid[o].rotation,
+                });
+                let mut order: Vec<(f64, usize)> = sols
+                    .iter()
+                    .enumerate()
+                    .map(|(i, q)| (joint_distance(cur, q), i))
+                    .collect();
+                order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                order
+                    .into_iter()
+                    .map(move |(_, i)| (o, i, sols[i]))
+                    .collect::<Vec<_>>()
+            })
     }
 
     /// Depth-first search of Algorithm 1 from path index `i`: the first candidate whose
@@ -402,6 +439,32 @@ impl PosePlanner {
             index: st.deepest,
             cell: path[st.deepest],
         }
+    }
+
+    /// The two clearance figures of the motion through `poses` (radians, in order), against
+    /// this planner's obstacles, over every interpolation step; `None` for no poses.
+    pub fn motion_clearance(&self, poses: &[Joints]) -> Option<MotionClearance> {
+        let first = poses.first()?;
+        let mut steps = vec![*first];
+        for w in poses.windows(2) {
+            steps.extend(
+                (1..=self.steps).map(|k| interpolate(&w[0], &w[1], k as f64 / self.steps as f64)),
+            );
+        }
+        let mut m = MotionClearance {
+            min_centre_clearance_cells: f64::INFINITY,
+            min_cube_distance_mm: f64::INFINITY,
+        };
+        for q in &steps {
+            let points = self.arm.points_mm(q);
+            m.min_centre_clearance_cells = m
+                .min_centre_clearance_cells
+                .min(self.clearance.centres_clearance_cells(&points));
+            m.min_cube_distance_mm = m
+                .min_cube_distance_mm
+                .min(self.clearance.capsules_gap_mm(&points, 0.0));
+        }
+        Some(m)
     }
 
     /// Best static clearance (cells) over every IK solution (within joint limits) of every

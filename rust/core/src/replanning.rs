@@ -12,8 +12,10 @@
 //!
 //! Each round learns a path from scratch (a fresh Q-table) on the scenario's obstacles plus
 //! every point added so far, then runs Algorithm 1 ([`crate::planner::PosePlanner`]) from
-//! beta_0. A blocked point is added as an obstacle for the terminal only: the arm's
-//! clearance is always measured against the scenario's own obstacles.
+//! beta_0, in the scenario's `planning.mode`, with the orientation grid of round k's n_d
+//! (`planning.orientation_divisions_for_round(k)`: the paper's "change n_d" on a re-plan).
+//! A blocked point is added as an obstacle for the terminal only: the arm's clearance is
+//! always measured against the scenario's own obstacles.
 //!
 //! Where the blocked point is the target itself (no clear motion reaches any pose there
 //! from the pose at the point before), the point before is recorded instead, so that the
@@ -45,7 +47,7 @@ use crate::error::{Error, Result};
 use crate::grid::GridWorld;
 use crate::planner::{PosePlan, PosePlanner};
 use crate::qlearning::{train, TrainOptions};
-use crate::scenario::{Cell, ClearanceModel, Scenario};
+use crate::scenario::{Cell, ClearanceModel, PoseSearchMode, Scenario};
 
 /// Options of one Algorithm 2 run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -221,6 +223,10 @@ pub struct RoundSummary {
     pub learning_time_s: f64,
     /// Where Algorithm 1 stopped, if it did: (index in the path, cell).
     pub blocked_at: Option<(usize, Cell)>,
+    /// n_d of this round's orientation grid (eq. 12).
+    pub orientation_divisions: u32,
+    /// Algorithm 1's search mode in this round.
+    pub mode: PoseSearchMode,
 }
 
 /// The result of [`plan`]; serialises to the JSON of `sixaxis plan` (SPEC section 3).
@@ -260,6 +266,12 @@ pub struct PlanResult {
     pub seed: u64,
     /// Wall time of the whole run, seconds.
     pub wall_time_s: f64,
+    /// Eq. 11's figure for the final motion: smallest distance from an obstacle centre to
+    /// the arm's polyline over every interpolation step, cells; None without poses.
+    pub min_centre_clearance_cells: Option<f64>,
+    /// Exact geometry for the same motion: smallest distance from the arm's polyline to an
+    /// obstacle cube, mm; None without poses.
+    pub min_cube_distance_mm: Option<f64>,
 }
 
 fn fmt_cell(c: Cell) -> String {
@@ -307,7 +319,6 @@ pub fn plan(
         }
     };
     let t0 = Instant::now();
-    let planner = PosePlanner::from_scenario(scenario);
     let beta0 = scenario.arm.beta0_rad();
     let mut result = PlanResult {
         success: false,
@@ -327,6 +338,8 @@ pub fn plan(
         rounds: Vec::new(),
         seed: opts.train.seed,
         wall_time_s: 0.0,
+        min_centre_clearance_cells: None,
+        min_cube_distance_mm: None,
     };
     let finish = |mut r: PlanResult, failure: Option<String>| {
         r.success = failure.is_none();
@@ -366,17 +379,24 @@ pub fn plan(
             total_steps: learned.total_steps,
             learning_time_s: learned.wall_time_s,
             blocked_at: None,
+            orientation_divisions: scenario.planning.orientation_divisions_for_round(round),
+            mode: scenario.planning.mode,
         };
         let Some(path) = learned.path else {
             result.rounds.push(summary);
             let why = learner.no_path_reason(round);
             return Ok(finish(result, Some(why)));
         };
+        let planner = PosePlanner::for_round(scenario, round);
         match planner.plan_poses(&path, &beta0) {
             PosePlan::Complete(points) => {
                 result.rounds.push(summary);
                 result.path = path;
                 result.poses_rad = points.iter().map(|p| p.joints_rad).collect();
+                if let Some(m) = planner.motion_clearance(&result.poses_rad) {
+                    result.min_centre_clearance_cells = Some(m.min_centre_clearance_cells);
+                    result.min_cube_distance_mm = Some(m.min_cube_distance_mm);
+                }
                 result.orientations_rpy_deg =
                     points.iter().map(|p| p.orientation_rpy_deg).collect();
                 return Ok(finish(result, None));

@@ -202,20 +202,52 @@ pub enum ClearanceModel {
     },
 }
 
+/// How Algorithm 1 searches the candidate poses of a path (`planning.mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PoseSearchMode {
+    /// The paper's Algorithm 1 as written: at each path point the first candidate whose
+    /// interpolated motion is clear is kept; a dead end stops the pass (no backtracking).
+    Paper,
+    /// Ours: the same candidate order searched depth first; after a dead end the search goes
+    /// back to earlier points' next candidates, within `planning.backtrack_budget`.
+    Backtracking,
+}
+
+impl PoseSearchMode {
+    /// The name used in scenario files and results (`"paper"`, `"backtracking"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            PoseSearchMode::Paper => "paper",
+            PoseSearchMode::Backtracking => "backtracking",
+        }
+    }
+}
+
 /// Pose planning parameters (Algorithms 1 and 2).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Planning {
     /// t: interpolation steps between two poses.
     pub interpolation_steps: u32,
-    /// n_d: divisions of a full turn in the orientation grid (eq. 12).
+    /// n_d of the first pass: divisions of a full turn in the orientation grid (eq. 12).
     pub orientation_divisions: u32,
+    /// Factor applied to n_d on every re-plan (Algorithm 1: "change n_d"): pass k uses
+    /// `orientation_divisions * growth^k`, capped at `orientation_divisions_max`; 1 keeps
+    /// n_d fixed.
+    pub orientation_divisions_growth: u32,
+    /// Cap of n_d over re-plans; with growth > 1 it must be `orientation_divisions *
+    /// growth^j` so that every grid contains the one before.
+    pub orientation_divisions_max: u32,
+    /// How Algorithm 1 searches the candidate poses: the paper's greedy pass or ours with
+    /// backtracking.
+    pub mode: PoseSearchMode,
     /// Re-plans allowed before Algorithm 2 gives up.
     pub max_replans: u32,
     /// Clearance model of the whole-arm check.
     pub clearance_model: ClearanceModel,
-    /// Joint-space motion checks Algorithm 1 may spend backtracking to earlier points'
-    /// other poses after a dead end; 0 gives the paper's greedy pass (our extension).
+    /// Joint-space motion checks Algorithm 1 may spend backtracking to earlier points' other
+    /// poses after a dead end (mode `backtracking` only; our extension).
     pub backtrack_budget: u32,
 }
 
@@ -224,9 +256,44 @@ impl Default for Planning {
         Planning {
             interpolation_steps: 50,
             orientation_divisions: 8,
+            orientation_divisions_growth: 2,
+            orientation_divisions_max: 64,
+            mode: PoseSearchMode::Paper,
             max_replans: 20,
             clearance_model: ClearanceModel::Centres,
             backtrack_budget: 2000,
+        }
+    }
+}
+
+impl Planning {
+    /// n_d of pass `round` (0 = the first pass, k = the k-th re-plan):
+    /// `orientation_divisions * orientation_divisions_growth^round`, capped at
+    /// `orientation_divisions_max` (never below `orientation_divisions`).
+    ///
+    /// ```
+    /// use sixaxis_core::scenario::Planning;
+    /// let p = Planning::default();
+    /// let n: Vec<u32> = (0..5).map(|k| p.orientation_divisions_for_round(k)).collect();
+    /// assert_eq!(n, [8, 16, 32, 64, 64]);
+    /// ```
+    pub fn orientation_divisions_for_round(&self, round: u32) -> u32 {
+        let mut n = self.orientation_divisions;
+        for _ in 0..round {
+            match n.checked_mul(self.orientation_divisions_growth) {
+                Some(next) if next <= self.orientation_divisions_max && next != n => n = next,
+                _ => break,
+            }
+        }
+        n
+    }
+
+    /// The motion checks Algorithm 1 may spend backtracking: `backtrack_budget` in mode
+    /// `backtracking`, 0 (the paper's greedy pass) in mode `paper`.
+    pub fn effective_backtrack_budget(&self) -> u32 {
+        match self.mode {
+            PoseSearchMode::Paper => 0,
+            PoseSearchMode::Backtracking => self.backtrack_budget,
         }
     }
 }
@@ -528,6 +595,40 @@ impl Scenario {
                 p.orientation_divisions,
                 "must be in 1..=72",
             ));
+        }
+        if p.orientation_divisions_growth == 0 {
+            return Err(Error::invalid(
+                "planning.orientation_divisions_growth",
+                0,
+                "must be >= 1 (1 keeps n_d fixed, 2 doubles it on every re-plan)",
+            ));
+        }
+        let cap = p.orientation_divisions_max;
+        if cap < p.orientation_divisions || cap > 72 {
+            return Err(Error::invalid(
+                "planning.orientation_divisions_max",
+                cap,
+                format!(
+                    "must be in {}..=72 (at least planning.orientation_divisions)",
+                    p.orientation_divisions
+                ),
+            ));
+        }
+        if p.orientation_divisions_growth > 1 {
+            let mut n = p.orientation_divisions;
+            while n < cap {
+                n = n.saturating_mul(p.orientation_divisions_growth);
+            }
+            if n != cap {
+                return Err(Error::invalid(
+                    "planning.orientation_divisions_max",
+                    cap,
+                    format!(
+                        "must be orientation_divisions × growth^j ({} × {}^j) so that every orientation grid contains the one before",
+                        p.orientation_divisions, p.orientation_divisions_growth
+                    ),
+                ));
+            }
         }
         if let ClearanceModel::Capsules {
             link_radius_mm,

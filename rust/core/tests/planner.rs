@@ -256,3 +256,81 @@ fn best_clearance_at_target_matches_brute_force() {
         );
     }
 }
+
+/// The paper's "change n_d": pass k uses n_d = 8·2^k, capped, and every grid contains the
+/// rotations of the one before.
+#[test]
+fn nd_rule_doubles_on_each_replan_and_grids_nest() {
+    let s = Scenario::builtin("paper_complex").unwrap();
+    assert_eq!(s.planning.orientation_divisions, 8);
+    let cap = s.planning.orientation_divisions_max;
+    for k in 0..6u32 {
+        let want = (8u32 << k).min(cap);
+        assert_eq!(
+            s.planning.orientation_divisions_for_round(k),
+            want,
+            "pass {k}"
+        );
+        if want <= 32 {
+            let p = PosePlanner::for_round(&s, k);
+            assert_eq!(p.orientation_divisions(), want);
+            assert_eq!(p.orientations().len(), orientation_grid(want).len());
+        }
+    }
+    assert_eq!(s.planning.orientation_divisions_for_round(10), cap);
+    for (coarse, fine) in [(8, 16), (16, 32)] {
+        let fine_grid = orientation_grid(fine);
+        for o in orientation_grid(coarse) {
+            assert!(
+                fine_grid
+                    .iter()
+                    .any(|f| (f.rotation - o.rotation).amax() < 1e-9),
+                "n_d {fine} lacks {:?} of n_d {coarse}",
+                o.rpy_deg
+            );
+        }
+    }
+    // n_d fixed: every pass uses the first grid.
+    let mut fixed = s.clone();
+    fixed.planning.orientation_divisions_growth = 1;
+    assert_eq!(fixed.planning.orientation_divisions_for_round(3), 8);
+}
+
+/// Both clearance figures of a motion agree with a naive recomputation over every step.
+#[test]
+fn motion_clearance_figures_match_naive_loops() {
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let planner = PosePlanner::from_scenario(&s);
+    let poses: Vec<Joints> = complete(planner.plan_poses(PATHS[1], &s.arm.beta0_rad()))
+        .iter()
+        .map(|p| p.joints_rad)
+        .collect();
+    let m = planner.motion_clearance(&poses).unwrap();
+    let arm = s.arm();
+    let t = s.planning.interpolation_steps;
+    let (mut centre_min, mut cube_min) = (f64::INFINITY, f64::INFINITY);
+    for w in poses.windows(2) {
+        for k in 0..=t {
+            let pts = arm.points_mm(&interpolate(&w[0], &w[1], k as f64 / t as f64));
+            centre_min = centre_min.min(naive_clearance(&pts, &s.obstacles, s.cell_mm));
+            cube_min = cube_min.min(common::naive_cube_distance_mm(
+                &pts,
+                &s.obstacles,
+                s.cell_mm,
+            ));
+        }
+    }
+    assert!((m.min_centre_clearance_cells - centre_min).abs() < 1e-12);
+    assert!(
+        (m.min_cube_distance_mm - cube_min).abs() < 1e-6,
+        "{m:?} vs {cube_min}"
+    );
+    // A cube lies within its circumscribed ball: the cube distance is at least the centre
+    // distance minus half a diagonal, and at most it minus half an edge.
+    let h = s.cell_mm / 2.0;
+    assert!(
+        m.min_cube_distance_mm >= m.min_centre_clearance_cells * s.cell_mm - h * 3f64.sqrt() - 1e-9
+    );
+    assert!(m.min_cube_distance_mm <= m.min_centre_clearance_cells * s.cell_mm - h + 1e-9);
+    assert_eq!(planner.motion_clearance(&[]), None);
+}

@@ -3,11 +3,12 @@
 
 mod common;
 
-use common::check_poses;
+use common::check_poses_nd;
 use sixaxis_core::generator::{generate, GeneratorOptions};
 use sixaxis_core::names::expand_names;
 use sixaxis_core::planner::PosePoint;
 use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};
+use sixaxis_core::scenario::PoseSearchMode;
 use sixaxis_core::{GridWorld, PosePlanner, Scenario};
 
 fn run(s: &Scenario, seed: u64) -> PlanResult {
@@ -48,7 +49,11 @@ fn check_result(s: &Scenario, r: &PlanResult) {
             orientation_rpy_deg,
         })
         .collect();
-    check_poses(s, &r.path, &points);
+    let n_d = r.rounds.last().expect("a round").orientation_divisions;
+    check_poses_nd(s, &r.path, &points, n_d);
+    let m = r.min_centre_clearance_cells.expect("a motion");
+    assert!(m > s.arm_safe_distance, "eq. 11 clearance {m}");
+    assert!(r.min_cube_distance_mm.expect("a motion") >= 0.0);
 }
 
 fn without_times(mut r: PlanResult) -> PlanResult {
@@ -99,13 +104,48 @@ fn replan_scenario_gets_a_replan_and_succeeds() {
 }
 
 #[test]
-fn greedy_pass_alone_is_the_papers_algorithm_1() {
-    // Budget 0: the paper's greedy pass. On paper_simple it succeeds, with the same poses
-    // as the backtracking search (which only differs after a dead end).
+fn search_modes_agree_where_the_greedy_pass_succeeds() {
+    // Backtracking only differs from the paper's greedy pass after a dead end: on
+    // paper_simple (no dead end) both give the same path and poses.
     let s = Scenario::builtin("paper_simple").unwrap();
-    let mut greedy = s.clone();
-    greedy.planning.backtrack_budget = 0;
-    assert_eq!(without_times(run(&greedy, 0)), without_times(run(&s, 0)));
+    assert_eq!(s.planning.mode, PoseSearchMode::Paper);
+    let mut bt = s.clone();
+    bt.planning.mode = PoseSearchMode::Backtracking;
+    let (a, b) = (run(&s, 0), run(&bt, 0));
+    assert_eq!((&a.path, &a.poses_rad), (&b.path, &b.poses_rad));
+    assert_eq!(a.rounds[0].mode, PoseSearchMode::Paper);
+    assert_eq!(b.rounds[0].mode, PoseSearchMode::Backtracking);
+}
+
+/// Table 3 with the paper's Algorithm 1 as written (the default of paper_complex): one
+/// re-plan at n_d = 8, then success at n_d = 16. Our backtracking needs none; the greedy
+/// pass without the n_d change fails.
+#[test]
+fn paper_complex_modes_give_the_documented_outcomes() {
+    let s = Scenario::builtin("paper_complex").unwrap();
+    assert_eq!(s.planning.mode, PoseSearchMode::Paper);
+    for seed in 0..3 {
+        let r = run(&s, seed);
+        check_result(&s, &r);
+        assert_eq!(r.replans, 1, "seed {seed}");
+        assert_eq!(r.added_obstacles, [[0, 2, 0]], "seed {seed}");
+        let nd: Vec<u32> = r.rounds.iter().map(|x| x.orientation_divisions).collect();
+        assert_eq!(nd, [8, 16], "seed {seed}");
+        assert!(r.rounds.iter().all(|x| x.mode == PoseSearchMode::Paper));
+        assert_eq!(r.rounds[0].path.as_ref().unwrap().len() - 1, 9);
+        assert_eq!(r.path.len() - 1, 11);
+    }
+    let mut bt = s.clone();
+    bt.planning.mode = PoseSearchMode::Backtracking;
+    let r = run(&bt, 0);
+    check_result(&bt, &r);
+    assert_eq!(r.replans, 0);
+    let mut fixed = s.clone();
+    fixed.planning.orientation_divisions_growth = 1;
+    let r = run(&fixed, 0);
+    assert!(!r.success);
+    assert!(r.rounds.iter().all(|x| x.orientation_divisions == 8));
+    assert_eq!(r.min_cube_distance_mm, None);
 }
 
 #[test]

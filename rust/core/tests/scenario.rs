@@ -197,6 +197,52 @@ fn joint_limits_must_be_ordered() {
 }
 
 #[test]
+fn planning_mode_and_nd_rule_are_validated() {
+    expect_invalid(
+        |v| v["planning"]["orientation_divisions_growth"] = json!(0),
+        "planning.orientation_divisions_growth",
+        "0",
+    );
+    // The cap must be at least the first n_d ...
+    expect_invalid(
+        |v| v["planning"]["orientation_divisions_max"] = json!(4),
+        "planning.orientation_divisions_max",
+        "4",
+    );
+    // ... at most 72 ...
+    expect_invalid(
+        |v| v["planning"]["orientation_divisions_max"] = json!(128),
+        "planning.orientation_divisions_max",
+        "128",
+    );
+    // ... and on the chain 8, 16, 32, 64 so that every grid contains the one before.
+    expect_invalid(
+        |v| v["planning"]["orientation_divisions_max"] = json!(48),
+        "planning.orientation_divisions_max",
+        "48",
+    );
+    let mut v = base();
+    v["planning"]["orientation_divisions_growth"] = json!(1);
+    v["planning"]["orientation_divisions_max"] = json!(48);
+    assert!(
+        parse(&v).is_ok(),
+        "with n_d fixed the cap only has to be >= n_d"
+    );
+    let mut v = base();
+    v["planning"]["mode"] = json!("greedy");
+    let e = parse(&v).unwrap_err().to_string();
+    assert!(
+        e.contains("greedy") && e.contains("paper") && e.contains("backtracking"),
+        "{e}"
+    );
+    for mode in ["paper", "backtracking"] {
+        let mut v = base();
+        v["planning"]["mode"] = json!(mode);
+        assert_eq!(parse(&v).unwrap().planning.mode.name(), mode);
+    }
+}
+
+#[test]
 fn load_by_name_path_and_unknown() {
     for name in BUILTIN_NAMES {
         assert_eq!(Scenario::load(name).unwrap().name, *name);

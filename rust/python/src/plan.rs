@@ -111,6 +111,18 @@ impl PyPlanResult {
     fn seed(&self) -> u64 {
         self.inner.seed
     }
+    /// Eq. 11's figure for the final motion: smallest distance from an obstacle centre to
+    /// the arm's polyline over every interpolation step, cells (``None`` without poses).
+    #[getter]
+    fn min_centre_clearance_cells(&self) -> Option<f64> {
+        self.inner.min_centre_clearance_cells
+    }
+    /// Exact geometry for the same motion: smallest distance from the arm's polyline to an
+    /// obstacle cube, mm (``None`` without poses).
+    #[getter]
+    fn min_cube_distance_mm(&self) -> Option<f64> {
+        self.inner.min_cube_distance_mm
+    }
     /// The scenario's own obstacles (before any were added).
     #[getter]
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {

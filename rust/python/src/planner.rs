@@ -46,8 +46,8 @@ pub fn clear_pose_at<'py>(
 }
 
 /// Algorithm 1: poses of the whole arm along a terminal path, with the scenario's arm,
-/// clearance model (``arm_safe_distance``), orientation grid, interpolation steps and joint
-/// limits.
+/// clearance model (``arm_safe_distance``), orientation grid (n_d of pass ``round``),
+/// interpolation steps, joint limits and ``planning.mode``.
 #[pyclass(name = "PosePlanner", module = "sixaxis_avoid", frozen)]
 pub struct PyPosePlanner {
     scenario: Arc<Scenario>,
@@ -77,11 +77,18 @@ fn poses_dict<'py>(py: Python<'py>, poses: &[PosePoint], d: &Bound<'py, PyDict>)
 #[pymethods]
 impl PyPosePlanner {
     #[new]
-    #[pyo3(signature = (scenario=None))]
-    fn py_new(py: Python<'_>, scenario: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+    #[pyo3(signature = (scenario=None, *, round=0))]
+    fn py_new(py: Python<'_>, scenario: Option<&Bound<'_, PyAny>>, round: u32) -> PyResult<Self> {
         let s = scenario_from_any(py, scenario)?;
-        let inner = PosePlanner::from_scenario(&s);
+        let inner = PosePlanner::for_round(&s, round);
         Ok(PyPosePlanner { scenario: s, inner })
+    }
+
+    /// n_d of this planner's orientation grid: the scenario's n_d rule at pass ``round``
+    /// (0 = the first pass; the paper's "change n_d" on every re-plan).
+    #[getter]
+    fn orientation_divisions(&self) -> u32 {
+        self.inner.orientation_divisions()
     }
 
     /// The scenario.

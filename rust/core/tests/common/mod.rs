@@ -23,8 +23,19 @@ pub fn naive_clearance(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> 
     m
 }
 
-/// Every check of a plan, independent of the planner.
+/// Every check of a plan, independent of the planner, on the first pass's orientation grid.
 pub fn check_poses(s: &Scenario, path: &[Cell], poses: &[sixaxis_core::planner::PosePoint]) {
+    check_poses_nd(s, path, poses, s.planning.orientation_divisions);
+}
+
+/// [`check_poses`] for a pass whose orientation grid has `n_d` divisions.
+pub fn check_poses_nd(
+    s: &Scenario,
+    path: &[Cell],
+    poses: &[sixaxis_core::planner::PosePoint],
+    n_d: u32,
+) {
+    let grid_step_deg = 360.0 / n_d as f64;
     let arm = s.arm();
     let clearance = Clearance::from_scenario(s);
     let steps = s.planning.interpolation_steps;
@@ -41,7 +52,11 @@ pub fn check_poses(s: &Scenario, path: &[Cell], poses: &[sixaxis_core::planner::
             let want = rotation_from_rpy_deg(p.orientation_rpy_deg);
             assert!((fk.rotation - want).amax() < 1e-9, "pose {i}: orientation");
             for a in p.orientation_rpy_deg {
-                assert_eq!(a % 45.0, 0.0, "pose {i}: rpy on the 45-degree grid");
+                assert_eq!(
+                    a % grid_step_deg,
+                    0.0,
+                    "pose {i}: rpy on the n_d = {n_d} grid"
+                );
             }
             for q in p.joints_rad {
                 assert!(q > -std::f64::consts::PI && q <= std::f64::consts::PI);
@@ -87,4 +102,33 @@ pub fn free_cells(s: &Scenario) -> Vec<Cell> {
         }
     }
     out
+}
+
+/// Exact distance (mm) from the polyline `points` (mm) to the nearest obstacle cube (edge
+/// `cell_mm`, on its cell), without parry: the distance from a point to a box is closed form,
+/// and along a segment it is convex, so a ternary search finds its minimum.
+pub fn naive_cube_distance_mm(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> f64 {
+    let h = cell_mm / 2.0;
+    let point_box = |p: Vector3<f64>, c: Vector3<f64>| {
+        let d = (p - c).abs().map(|x| (x - h).max(0.0));
+        d.norm()
+    };
+    let mut m = f64::INFINITY;
+    for w in points.windows(2) {
+        for &o in obstacles {
+            let c = centre(o, cell_mm);
+            let at = |t: f64| point_box(w[0] + (w[1] - w[0]) * t, c);
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            for _ in 0..200 {
+                let (a, b) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+                if at(a) <= at(b) {
+                    hi = b;
+                } else {
+                    lo = a;
+                }
+            }
+            m = m.min(at(0.5 * (lo + hi))).min(at(0.0)).min(at(1.0));
+        }
+    }
+    m
 }
