@@ -12,6 +12,24 @@ use sixaxis_core::Scenario;
 use crate::progress;
 use crate::Failure;
 
+/// `--episodes N` or `--episodes auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Episodes {
+    /// A fixed number of episodes.
+    Fixed(u32),
+    /// Until the greedy path settles.
+    Auto,
+}
+
+fn parse_episodes(text: &str) -> Result<Episodes, String> {
+    if text == "auto" {
+        return Ok(Episodes::Auto);
+    }
+    text.parse::<u32>()
+        .map(Episodes::Fixed)
+        .map_err(|_| format!("`{text}` is neither a whole number of episodes nor `auto`"))
+}
+
 /// Learning options shared by `train` and `plan`.
 #[derive(Args, Debug, Clone)]
 pub struct LearnArgs {
@@ -21,9 +39,14 @@ pub struct LearnArgs {
     /// Seed of the learner's random generator (default: the scenario's `learning.seed`).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Learning episodes (default: the scenario's `learning.episodes`, the paper's 10000).
-    #[arg(long)]
-    pub episodes: Option<u32>,
+    /// Learning episodes (default: the scenario's `learning.episodes`, the paper's 10000), or
+    /// `auto`: train until the greedy path reaches the target and stops changing, under
+    /// `--episode-cap` (epsilon follows the run; see docs/PERFORMANCE.md).
+    #[arg(long, value_name = "N|auto", value_parser = parse_episodes)]
+    pub episodes: Option<Episodes>,
+    /// Episode cap of `--episodes auto`.
+    #[arg(long, value_name = "N", default_value_t = sixaxis_core::qlearning::AUTO_EPISODE_CAP)]
+    pub episode_cap: u32,
     /// Turn both assisted strategies off (eq. 5 rewards alone).
     #[arg(long)]
     pub no_assist: bool,
@@ -46,11 +69,21 @@ impl LearnArgs {
         if let Some(seed) = self.seed {
             opts.seed = seed;
         }
-        if let Some(n) = self.episodes {
-            if n == 0 {
+        match self.episodes {
+            Some(Episodes::Fixed(0)) => {
                 return Err(sixaxis_core::Error::argument("--episodes", 0, "must be > 0").into());
             }
-            opts.episodes = n;
+            Some(Episodes::Fixed(n)) => opts.episodes = n,
+            Some(Episodes::Auto) => {
+                if self.episode_cap == 0 {
+                    return Err(
+                        sixaxis_core::Error::argument("--episode-cap", 0, "must be > 0").into(),
+                    );
+                }
+                opts = opts.auto();
+                opts.episodes = self.episode_cap;
+            }
+            None => {}
         }
         let mut assist: Assist = opts.assist;
         if self.no_assist {
@@ -96,6 +129,11 @@ pub fn train_json(
         "scenario": s.name,
         "seed": opts.seed,
         "episodes": opts.episodes,
+        "episodes_auto": opts.episodes_auto,
+        "episodes_run": r.steps_per_episode.len(),
+        "steps_to_converged": r.converged_episode.map(|e| {
+            r.steps_per_episode[..=e as usize].iter().map(|&k| k as u64).sum::<u64>()
+        }),
         "assist": opts.assist,
         "reached": r.path.is_some(),
         "path": r.path,

@@ -14,6 +14,7 @@
 //! - [`clearance`] — whole-arm clearance (eq. 11 and exact capsules), joint-space motion checks.
 //! - [`planner`] — pose planning over a terminal path (Algorithm 1).
 //! - [`replanning`] — the integrated loop with re-planning (Algorithm 2).
+//! - [`regrid`] — the same physical world at another cell size.
 //! - [`generator`] — random cluttered scenarios for benchmarks.
 //! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type; [`io`] — atomic file output.
@@ -40,6 +41,7 @@ pub mod io;
 pub mod kinematics;
 pub mod planner;
 pub mod qlearning;
+pub mod regrid;
 pub mod replanning;
 pub mod scenario;
 
