@@ -2,7 +2,7 @@
 
 from collections.abc import Callable, Iterable, Sequence
 from os import PathLike
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -55,6 +55,7 @@ class Scenario:
     def to_dict(self) -> dict[str, Any]: ...
     def validate(self) -> None: ...
     def replace(self, **changes: Any) -> Scenario: ...
+    def regrid(self, cell_mm: float) -> Scenario: ...
     @property
     def name(self) -> str: ...
     @property
@@ -142,7 +143,7 @@ class TrainResult:
 def train(
     scenario: ScenarioLike = None,
     *,
-    episodes: int | None = None,
+    episodes: int | Literal["auto"] | None = None,
     seed: int | None = None,
     assist: bool | None = None,
     max_steps_per_episode: int | None = None,
@@ -289,7 +290,7 @@ class PlanResult:
 def plan(
     scenario: ScenarioLike = None,
     seed: int | None = None,
-    episodes: int | None = None,
+    episodes: int | Literal["auto"] | None = None,
     assist: bool | None = True,
     max_replans: int | None = None,
 ) -> PlanResult: ...

@@ -221,9 +221,7 @@ pub fn plan(
     if let Some(v) = uint_arg(py, "seed", seed, 0, u64::MAX)? {
         opts.train.seed = v;
     }
-    if let Some(v) = uint_arg(py, "episodes", episodes, 1, u32::MAX as u64)? {
-        opts.train.episodes = v as u32;
-    }
+    crate::train::apply_episodes(py, &mut opts.train, episodes)?;
     if let Some(a) = assist {
         opts.train.assist = if a { Assist::on() } else { Assist::off() };
     }

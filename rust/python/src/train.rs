@@ -185,6 +185,42 @@ fn q_from_array(
     run_attached(py, || QTable::from_values(world.num_states(), values))
 }
 
+/// ``episodes``: ``None`` (the scenario's), a whole number, or ``"auto"`` (train until the
+/// greedy path settles, under a cap of 1,000,000 episodes; see the core's `qlearning` docs).
+pub fn apply_episodes(
+    py: Python<'_>,
+    opts: &mut TrainOptions,
+    episodes: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    let Some(e) = episodes.filter(|e| !e.is_none()) else {
+        return Ok(());
+    };
+    if let Ok(text) = e.extract::<String>() {
+        if text == "auto" {
+            *opts = opts.clone().auto();
+            return Ok(());
+        }
+    }
+    let bad = || {
+        invalid_argument(
+            py,
+            "episodes",
+            crate::convert::repr(e),
+            "must be an integer in 1..=4294967295 or \"auto\"",
+        )
+    };
+    if e.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(bad());
+    }
+    opts.episodes = e
+        .extract::<i64>()
+        .ok()
+        .and_then(|v| u32::try_from(v).ok())
+        .filter(|&v| v > 0)
+        .ok_or_else(bad)?;
+    Ok(())
+}
+
 /// Learn a path with tabular Q-learning (eqs. 6-8) on a scenario.
 ///
 /// Same arithmetic and random stream as the core (and the ``sixaxis train`` CLI): for the
@@ -198,7 +234,7 @@ fn q_from_array(
 pub fn train(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
-    episodes: Option<i64>,
+    episodes: Option<&Bound<'_, PyAny>>,
     seed: Option<i64>,
     assist: Option<bool>,
     max_steps_per_episode: Option<i64>,
@@ -208,12 +244,7 @@ pub fn train(
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
     let mut opts = TrainOptions::from_scenario(&s);
-    if let Some(e) = episodes {
-        opts.episodes = u32::try_from(e)
-            .ok()
-            .filter(|&e| e > 0)
-            .ok_or_else(|| invalid_argument(py, "episodes", e, "must be in 1..=4294967295"))?;
-    }
+    apply_episodes(py, &mut opts, episodes)?;
     if let Some(v) = seed {
         opts.seed =
             u64::try_from(v).map_err(|_| invalid_argument(py, "seed", v, "must be >= 0"))?;
