@@ -103,14 +103,17 @@ def table(rows: list[dict]) -> str:
     ]
     for r in rows:
         c = r["cell_mm"]
+        rss_goal = RSS_GOAL_KB.get(c)
+        train_rss = goal(r["train_peak_rss_kb"] / 1024, rss_goal and rss_goal / 1024, "{:.0f} MB")
+        failed = "" if r["plan_success"] else ", failed"
         lines.append(
             f"| {c:g} mm | {r['states']:,} | {r['q_table_bytes'] / 1e6:.2f} MB "
             f"| {r['shortest_path_length']} | {r['path_length']} "
             f"| {r['converged_episode']:,} | {r['steps_to_converged']:,} "
             f"| {r['episodes_run']:,} | {goal(r['train_wall_s'], LEARN_GOAL_S.get(c), '{:.2f} s')} "
-            f"| {goal(r['train_peak_rss_kb'] / 1024, RSS_GOAL_KB.get(c, 0) / 1024 or None, '{:.0f} MB')} "
+            f"| {train_rss} "
             f"| {goal(r['plan_wall_s'], PLAN_GOAL_S.get(c), '{:.2f} s')} "
-            f"({r['plan_path_points']}, {r['plan_replans']}{'' if r['plan_success'] else ', failed'}) "
+            f"({r['plan_path_points']}, {r['plan_replans']}{failed}) "
             f"| {r['plan_peak_rss_kb'] / 1024:.0f} MB |"
         )
     return "\n".join(lines)

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use clap::Args;
-use serde_json::{json, Value};
 use rayon::prelude::*;
+use serde_json::{json, Value};
 use sixaxis_core::grid::{Assist, GridWorld};
 use sixaxis_core::qlearning::{train, TrainOptions};
 use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};

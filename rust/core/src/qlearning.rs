@@ -639,7 +639,11 @@ fn train_impl(
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
 
     // A fixed run knows its length; an auto run grows its vectors as it goes.
-    let reserve = if opts.episodes_auto { 0 } else { episodes as usize };
+    let reserve = if opts.episodes_auto {
+        0
+    } else {
+        episodes as usize
+    };
     let mut steps_per_episode = Vec::with_capacity(reserve);
     let mut reached_per_episode = Vec::with_capacity(reserve);
     // episodes_auto: the episode after which the greedy path first reached the target.

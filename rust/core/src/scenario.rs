@@ -152,8 +152,7 @@ impl ObstacleBox {
 
     fn check(&self, field: &str) -> Result<()> {
         let all = self.min_mm.iter().chain(&self.max_mm);
-        if !all.clone().all(|v| v.is_finite()) || (0..3).any(|i| self.min_mm[i] > self.max_mm[i])
-        {
+        if !all.clone().all(|v| v.is_finite()) || (0..3).any(|i| self.min_mm[i] > self.max_mm[i]) {
             return Err(Error::invalid(
                 field,
                 format!("min_mm {:?} max_mm {:?}", self.min_mm, self.max_mm),
@@ -513,16 +512,21 @@ impl Scenario {
     pub fn terminal_blocker(&self, c: Cell) -> Option<String> {
         let d_s = self.terminal_safe_distance;
         for o in &self.obstacles {
-            let d2: i64 = (0..3).map(|i| (c[i] - o[i]) as i64 * (c[i] - o[i]) as i64).sum();
+            let d2: i64 = (0..3)
+                .map(|i| (c[i] - o[i]) as i64 * (c[i] - o[i]) as i64)
+                .sum();
             if (d2 as f64).sqrt() <= d_s {
                 return Some(format!("obstacle {}", fmt_cell(*o)));
             }
         }
         let d_s_mm = self.terminal_safe_distance_in_mm();
         let p = c.map(|v| v as f64 * self.cell_mm);
-        self.obstacle_boxes_mm.iter().enumerate().find_map(|(i, b)| {
-            (b.terminal_distance_mm(p) <= d_s_mm).then(|| format!("obstacle_boxes_mm[{i}]"))
-        })
+        self.obstacle_boxes_mm
+            .iter()
+            .enumerate()
+            .find_map(|(i, b)| {
+                (b.terminal_distance_mm(p) <= d_s_mm).then(|| format!("obstacle_boxes_mm[{i}]"))
+            })
     }
 
     /// Check every field; the error names the field and the value.

@@ -37,7 +37,10 @@ fn regridded_paper_world_blocks_the_same_places() {
         assert_eq!(r.arm_safe_distance_mm, Some(76.0));
         assert_eq!(r.start.map(|v| v as f64 * cell), [0.0, -200.0, 400.0]);
         assert_eq!(r.target.map(|v| v as f64 * cell), [0.0, 300.0, 0.0]);
-        assert_eq!(r.bounds.min.map(|v| v as f64 * cell), [-300.0, -300.0, -200.0]);
+        assert_eq!(
+            r.bounds.min.map(|v| v as f64 * cell),
+            [-300.0, -300.0, -200.0]
+        );
         assert_eq!(r.bounds.max.map(|v| v as f64 * cell), [300.0, 500.0, 500.0]);
         let w = GridWorld::new(&r).unwrap();
         let want = brute_blocked(&r, &w);
@@ -118,7 +121,10 @@ fn auto_episodes_find_the_bfs_optimum_at_each_size() {
         let t = train(&w, &opts, None, None).unwrap();
         let path = t.path.expect("a path");
         assert_eq!(path.len(), w.shortest_path().unwrap().len(), "{cell} mm");
-        assert!((t.steps_per_episode.len() as u32) < opts.episodes, "stopped by the rule");
+        assert!(
+            (t.steps_per_episode.len() as u32) < opts.episodes,
+            "stopped by the rule"
+        );
         for pair in path.windows(2) {
             let d: i32 = (0..3).map(|i| (pair[0][i] - pair[1][i]).abs()).sum();
             assert_eq!(d, 1);
