@@ -8,6 +8,7 @@ text between the ``scale`` markers of docs/PERFORMANCE.md; the raw figures go to
 
     python scripts/bench_scale.py                    # 100, 50, 25, 12.5 mm
     python scripts/bench_scale.py --cells 100 50     # a subset
+    python scripts/bench_scale.py --from-json results/scale.json   # re-render the table
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ def parse_args() -> argparse.Namespace:
     p.add_argument("--out", default=str(ROOT / "results" / "scale.json"))
     p.add_argument("--doc", default=str(ROOT / "docs" / "PERFORMANCE.md"))
     p.add_argument("--no-doc", action="store_true", help="print the table only")
+    p.add_argument("--from-json", help="render the table from figures saved by --out")
     return p.parse_args()
 
 
@@ -121,11 +123,14 @@ def table(rows: list[dict]) -> str:
 
 def main() -> None:
     a = parse_args()
-    with tempfile.TemporaryDirectory() as d:
-        rows = [measure(a.binary, a.scenario, c, a.seed, Path(d)) for c in a.cells]
-    out = Path(a.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(rows, indent=2) + "\n")
+    if a.from_json:
+        rows = json.loads(Path(a.from_json).read_text())
+    else:
+        with tempfile.TemporaryDirectory() as d:
+            rows = [measure(a.binary, a.scenario, c, a.seed, Path(d)) for c in a.cells]
+        out = Path(a.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(rows, indent=2) + "\n")
     text = table(rows)
     print(text)
     if a.no_doc:
