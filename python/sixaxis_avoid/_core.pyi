@@ -55,6 +55,7 @@ class Scenario:
     def to_dict(self) -> dict[str, Any]: ...
     def validate(self) -> None: ...
     def replace(self, **changes: Any) -> Scenario: ...
+    def regrid(self, cell_mm: float) -> Scenario: ...
     @property
     def name(self) -> str: ...
     @property
@@ -144,7 +145,8 @@ class TrainResult:
 def train(
     scenario: ScenarioLike = None,
     *,
-    episodes: int | None = None,
+    episodes: int | Literal["auto"] | None = None,
+    episode_cap: int | None = None,
     seed: int | None = None,
     assist: bool | None = None,
     detour: bool | None = None,
@@ -311,7 +313,8 @@ def plan(
     scenario: ScenarioLike = None,
     *,
     seed: int | None = None,
-    episodes: int | None = None,
+    episodes: int | Literal["auto"] | None = None,
+    episode_cap: int | None = None,
     assist: bool | None = None,
     detour: bool | None = None,
     distance: bool | None = None,

@@ -8,7 +8,8 @@ use sixaxis_core::grid::GridWorld;
 use sixaxis_core::qlearning::{train, QTable, TrainOptions, TrainResult};
 use sixaxis_core::replanning::{plan, BfsLearner, PlanResult};
 use sixaxis_core::request::{
-    parse_int, LearnerKind, PlanRequest, TrainRequest, EPISODES, MAX_REPLANS, MAX_STEPS, SEED,
+    parse_episodes, parse_int, LearnerKind, PlanRequest, TrainRequest, EPISODE_CAP, MAX_REPLANS,
+    MAX_STEPS, SEED,
 };
 use sixaxis_core::Scenario;
 
@@ -25,9 +26,14 @@ pub struct LearnArgs {
     /// Seed of the learner's random generator (default: the scenario's `learning.seed`).
     #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<String>,
-    /// Learning episodes (default: the scenario's `learning.episodes`, the paper's 10000).
-    #[arg(long, allow_hyphen_values = true)]
+    /// Learning episodes (default: the scenario's `learning.episodes`, the paper's 10000), or
+    /// `auto`: train until the greedy path reaches the target and stops changing, under
+    /// `--episode-cap` (epsilon follows the run; see docs/SCENARIOS.md).
+    #[arg(long, value_name = "N|auto", allow_hyphen_values = true)]
     pub episodes: Option<String>,
+    /// Episode cap of `--episodes auto` (default 1000000).
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub episode_cap: Option<String>,
     /// Step cap of an episode (default: the scenario's `learning.max_steps_per_episode`).
     #[arg(long, allow_hyphen_values = true)]
     pub max_steps_per_episode: Option<String>,
@@ -65,8 +71,14 @@ impl LearnArgs {
         let int = |domain, text: &Option<String>| -> Result<Option<i128>, Failure> {
             Ok(text.as_deref().map(|t| parse_int(domain, t)).transpose()?)
         };
+        let (episodes, auto) = match self.episodes.as_deref() {
+            Some(t) => parse_episodes(t)?,
+            None => (None, false),
+        };
         Ok(TrainRequest {
-            episodes: int(EPISODES, &self.episodes)?,
+            episodes,
+            episodes_auto: auto.then_some(true),
+            episode_cap: int(EPISODE_CAP, &self.episode_cap)?,
             seed: int(SEED, &self.seed)?,
             assist: switch(self.assist, self.no_assist),
             detour: switch(self.detour, self.no_detour),
@@ -112,6 +124,11 @@ pub fn train_json(
         "scenario": s.name,
         "seed": opts.seed,
         "episodes": opts.episodes,
+        "episodes_auto": opts.episodes_auto,
+        "episodes_run": r.steps_per_episode.len(),
+        "steps_to_converged": r.converged_episode.map(|e| {
+            r.steps_per_episode[..=e as usize].iter().map(|&k| k as u64).sum::<u64>()
+        }),
         "assist": opts.assist,
         "reached": r.path.is_some(),
         "path": r.path,

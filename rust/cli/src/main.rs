@@ -127,6 +127,21 @@ enum Command {
         #[command(flatten)]
         out: OutArgs,
     },
+    /// The same physical world at another cell size: obstacle boxes and safe distances kept
+    /// in mm, start and target at the same points (an error if they are not cell centres of
+    /// the new grid). Prints the new scenario's JSON.
+    ///
+    /// Example: sixaxis regrid --scenario paper_simple --cell-mm 50 --out simple_50mm.json
+    Regrid {
+        /// Scenario file or built-in name.
+        #[arg(long, value_name = "NAME_OR_FILE")]
+        scenario: String,
+        /// Edge of a cell of the new grid, mm.
+        #[arg(long, value_name = "MM")]
+        cell_mm: f64,
+        #[command(flatten)]
+        out: OutArgs,
+    },
     /// Run the paper's experiments: JSON, figures and docs/REPRODUCTION.md.
     ///
     /// Example: sixaxis reproduce --seeds 10 --out-dir results/reproduce
@@ -263,6 +278,19 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 Some(why) => Err(Failure::Run(why)),
                 None => Ok(()),
             }
+        }
+        Command::Regrid {
+            scenario,
+            cell_mm,
+            out,
+        } => {
+            let s = sixaxis_core::regrid::regrid(&Scenario::load(&scenario)?, cell_mm)?;
+            let text = s.to_json() + "\n";
+            match &out.out {
+                Some(path) => sixaxis_core::io::write_atomic(path, text.as_bytes())?,
+                None => print!("{text}"),
+            }
+            Ok(())
         }
         Command::Reproduce { args, out } => emit(&reproduce::run(&args)?, &out),
         Command::Reach { scenario, out } => emit(&reach(&scenario)?, &out),

@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use clap::Args;
+use rayon::prelude::*;
 use serde_json::{json, Value};
 use sixaxis_core::grid::{Assist, GridWorld};
 use sixaxis_core::qlearning::{train, TrainOptions};
@@ -88,14 +89,23 @@ fn learn_condition(
 ) -> Result<Value, Failure> {
     let mut runs = Vec::new();
     let mut curve_sum: Vec<f64> = Vec::new();
-    for seed in 0..a.seeds {
-        let mut opts = TrainOptions::from_scenario(s);
-        opts.seed = seed;
-        opts.assist = assist;
-        if let Some(n) = a.episodes {
-            opts.episodes = n;
-        }
-        let r = train(world, &opts, None, None)?;
+    // Seeds are independent runs: learned on all cores (rayon), then gathered in seed order,
+    // so every figure but the wall times is the same as a sequential run.
+    let learned = (0..a.seeds)
+        .into_par_iter()
+        .map(|seed| {
+            let mut opts = TrainOptions::from_scenario(s);
+            opts.seed = seed;
+            opts.assist = assist;
+            if let Some(n) = a.episodes {
+                opts.episodes = n;
+            }
+            let r = train(world, &opts, None, None);
+            pb.inc(1);
+            r.map(|r| (seed, opts, r))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    for (seed, opts, r) in learned {
         if curve_sum.is_empty() {
             curve_sum = vec![0.0; r.steps_per_episode.len()];
         }
@@ -107,7 +117,6 @@ fn learn_condition(
             v.as_object_mut().expect("an object").remove("path");
         }
         runs.push(v);
-        pb.inc(1);
     }
     let n = a.seeds.max(1) as f64;
     let times: Vec<f64> = runs
@@ -246,30 +255,33 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
         let world = GridWorld::new(s)?;
         let assisted = learn_condition(s, &world, Assist::on(), a, &pb)?;
         let unassisted = learn_condition(s, &world, Assist::off(), a, &pb)?;
-        let mut plans = Vec::new();
-        for seed in 0..a.seeds {
-            let mut opts = PlanOptions::from_scenario(s);
-            opts.train.seed = seed;
-            opts.train.assist = Assist::on();
-            if let Some(n) = a.episodes {
-                opts.train.episodes = n;
-            }
-            let r = plan(s, &opts, None, None)?;
-            let mut entry = plan_json(s, &r, seed == 0);
-            let mut modes = serde_json::Map::new();
-            for (key, _) in MODES {
-                let v = with_mode(s, key);
-                let m = if v.planning == s.planning {
-                    r.clone()
-                } else {
-                    plan(&v, &opts, None, None)?
-                };
-                modes.insert(key.into(), plan_json(&v, &m, false));
-            }
-            entry["modes"] = Value::Object(modes);
-            plans.push(entry);
-            pb.inc(1);
-        }
+        // Independent seeds on all cores, gathered in seed order (as for learning).
+        let plans = (0..a.seeds)
+            .into_par_iter()
+            .map(|seed| -> Result<Value, Failure> {
+                let mut opts = PlanOptions::from_scenario(s);
+                opts.train.seed = seed;
+                opts.train.assist = Assist::on();
+                if let Some(n) = a.episodes {
+                    opts.train.episodes = n;
+                }
+                let r = plan(s, &opts, None, None)?;
+                let mut entry = plan_json(s, &r, seed == 0);
+                let mut modes = serde_json::Map::new();
+                for (key, _) in MODES {
+                    let v = with_mode(s, key);
+                    let m = if v.planning == s.planning {
+                        r.clone()
+                    } else {
+                        plan(&v, &opts, None, None)?
+                    };
+                    modes.insert(key.into(), plan_json(&v, &m, false));
+                }
+                entry["modes"] = Value::Object(modes);
+                pb.inc(1);
+                Ok(entry)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         out.push(json!({
             "name": s.name,
             "notes": s.notes,

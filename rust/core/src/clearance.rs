@@ -27,6 +27,12 @@
 //!   centre-to-segment distance, `max(0, dc - h√3 - r) <= gap <= max(0, dc - h - r)` (the cube
 //!   lies between its inscribed and circumscribed balls).
 //!
+//! Boxes in mm (`obstacle_boxes_mm`, [`ObstacleBox`]): under the centres model a `centre`
+//! box counts as its centre point (eq. 11, as the paper's cubes) and a `surface` box by the
+//! exact distance from each segment to the box (parry), both against `arm_safe_distance`;
+//! under the capsules model every box by its exact gap to the capsules. Set them with
+//! [`Clearance::with_boxes`] ([`Clearance::from_scenario`] does).
+//!
 //! Units: positions in mm; clearances in cells unless a name says mm.
 //!
 //! ```
@@ -48,7 +54,7 @@ use nalgebra::Vector3;
 use parry3d_f64::shape::{Ball, Cuboid, Segment};
 
 use crate::kinematics::{wrap_angle, Arm, ArmPoints, Joints};
-use crate::scenario::{Cell, ClearanceModel, Scenario};
+use crate::scenario::{Cell, ClearanceModel, DistanceTo, ObstacleBox, Scenario};
 
 /// Lanes of the obstacle loop; the centre arrays are padded to a multiple of this.
 const LANES: usize = 4;
@@ -77,6 +83,11 @@ pub struct Clearance {
     arm_safe_distance_cells: f64,
     /// Whether the CPU has AVX (x86_64): picks the 4-wide eq. 11 kernel.
     avx: bool,
+    /// Obstacle boxes in mm (the centres of `centre` boxes are also in `xs`/`ys`/`zs`,
+    /// after the `count` cubes).
+    boxes: Vec<ObstacleBox>,
+    /// Number of centre points in `xs`/`ys`/`zs` (cubes, then `centre` boxes).
+    centre_count: usize,
 }
 
 /// Distance from point `p` to segment `a`-`b` (eq. 11), in the unit of the inputs.
@@ -188,11 +199,20 @@ fn to_parry(v: &Vector3<f64>) -> parry3d_f64::math::Vector {
 
 /// Exact distance (mm) from segment `a`-`b` (mm, expressed relative to the cube's centre) to
 /// an axis-aligned cube of half-extent `half_mm` at the origin. A zero-length segment is a
-/// point. This is the only parry call of the crate.
+/// point.
 fn segment_cube_distance_mm(a: &Vector3<f64>, b: &Vector3<f64>, half_mm: f64) -> f64 {
+    segment_box_distance_mm(a, b, [half_mm; 3])
+}
+
+/// Exact distance (mm) from segment `a`-`b` (mm, relative to the box's centre) to an
+/// axis-aligned box of half-extents `half_mm` at the origin. This is the only parry call of
+/// the crate.
+fn segment_box_distance_mm(a: &Vector3<f64>, b: &Vector3<f64>, half_mm: [f64; 3]) -> f64 {
     use parry3d_f64::math::Pose;
     use parry3d_f64::query;
-    let cube = Cuboid::new(parry3d_f64::math::Vector::splat(half_mm));
+    let cube = Cuboid::new(parry3d_f64::math::Vector::new(
+        half_mm[0], half_mm[1], half_mm[2],
+    ));
     let id = Pose::IDENTITY;
     let result = if (b - a).norm_squared() == 0.0 {
         query::distance(
@@ -433,7 +453,56 @@ impl Clearance {
             model,
             arm_safe_distance_cells,
             avx: cpu_has_avx(),
+            boxes: Vec::new(),
+            centre_count: count,
         }
+    }
+
+    /// The same clearance with obstacle boxes in mm added (see the module docs for how each
+    /// model measures them). The centres of `centre` boxes join the eq. 11 centre points.
+    pub fn with_boxes(mut self, boxes: &[ObstacleBox]) -> Clearance {
+        let centres: Vec<[f64; 3]> = boxes
+            .iter()
+            .filter(|b| b.distance_to == DistanceTo::Centre)
+            .map(|b| b.centre_mm().map(|v| v / self.cell_mm))
+            .collect();
+        let total = self.centre_count + centres.len();
+        let chunks = total.div_ceil(LANES);
+        for arr in [&mut self.xs, &mut self.ys, &mut self.zs] {
+            arr.resize(chunks, [FAR; LANES]);
+        }
+        for (k, c) in centres.iter().enumerate() {
+            let i = self.centre_count + k;
+            self.xs[i / LANES][i % LANES] = c[0];
+            self.ys[i / LANES][i % LANES] = c[1];
+            self.zs[i / LANES][i % LANES] = c[2];
+        }
+        self.centre_count = total;
+        self.boxes.extend_from_slice(boxes);
+        self
+    }
+
+    /// Smallest exact distance (mm) from the polyline to the `surface` boxes (centres
+    /// model), or to every box (`all`, capsules model, before subtracting the radius).
+    fn boxes_distance_mm(&self, points: &ArmPoints, all: bool, stop: f64) -> f64 {
+        let mut best = f64::INFINITY;
+        for b in &self.boxes {
+            if !all && b.distance_to == DistanceTo::Centre {
+                continue;
+            }
+            let c = Vector3::from(b.centre_mm());
+            let h = b.half_extents_mm();
+            for (p, q) in capsule_links(points) {
+                let d = segment_box_distance_mm(&(p - c), &(q - c), h);
+                if d < best {
+                    best = d;
+                    if best <= stop {
+                        return best;
+                    }
+                }
+            }
+        }
+        best
     }
 
     /// Clearance against the scenario's own obstacles, with its `cell_mm`,
@@ -445,11 +514,12 @@ impl Clearance {
             s.planning.clearance_model,
             s.arm_safe_distance,
         )
+        .with_boxes(&s.obstacle_boxes_mm)
     }
 
     /// Number of obstacles.
     pub fn obstacle_count(&self) -> usize {
-        self.count
+        self.count + self.boxes.len()
     }
 
     /// Obstacle centre `i`, cells.
@@ -509,9 +579,14 @@ impl Clearance {
     }
 
     /// Centres model (eq. 11): smallest distance from any obstacle centre to any of the 7
-    /// polyline segments, in cells; `INFINITY` without obstacles.
+    /// polyline segments, in cells; `INFINITY` without obstacles. `surface` boxes count by
+    /// their exact distance.
     pub fn centres_clearance_cells(&self, points: &ArmPoints) -> f64 {
-        self.min_d2(points, -1.0).sqrt()
+        let d = self.min_d2(points, -1.0).sqrt();
+        if self.boxes.is_empty() || d.is_nan() {
+            return d;
+        }
+        d.min(self.boxes_distance_mm(points, false, -1.0) / self.cell_mm)
     }
 
     /// Capsules model: smallest gap between the 7 link capsules and the obstacle cubes, mm
@@ -537,6 +612,9 @@ impl Clearance {
                     best = gap;
                 }
             }
+        }
+        if !self.boxes.is_empty() {
+            best = best.min((self.boxes_distance_mm(points, true, -1.0) - r).max(0.0));
         }
         best
     }
@@ -566,6 +644,9 @@ impl Clearance {
                 let t = self.arm_safe_distance_cells;
                 let t2 = t * t;
                 self.min_d2(points, t2) > t2
+                    && (self.boxes.is_empty()
+                        || self.boxes_distance_mm(points, false, t * self.cell_mm)
+                            > t * self.cell_mm)
             }
             ClearanceModel::Capsules {
                 link_radius_mm,
@@ -592,7 +673,8 @@ impl Clearance {
                         }
                     }
                 }
-                true
+                self.boxes.is_empty()
+                    || self.boxes_distance_mm(points, true, margin_mm + r) - r > margin_mm
             }
         }
     }

@@ -26,6 +26,10 @@
 //! - **Collision**: a move collides when the new cell is out of bounds, or when its
 //!   Euclidean distance (cells) to some obstacle centre is `<= terminal_safe_distance`
 //!   (such cells are *blocked*). On a collision the terminal stays where it was.
+//!   Boxes in mm (`obstacle_boxes_mm`) block the cells whose centre (mm) lies within
+//!   `terminal_safe_distance` (mm) of the box by its rule
+//!   ([`ObstacleBox::terminal_distance_mm`](crate::scenario::ObstacleBox::terminal_distance_mm)).
+//!   An extra obstacle (a point Algorithm 2 adds) blocks its own cell only.
 //! - **Rewards** (penalties are positive magnitudes in [`Rewards`]):
 //!   - eq. 5: `+target_reward` when the move reaches the target, `-collision_penalty` when
 //!     it collides, `-step_penalty` otherwise. A collision never counts as reaching the
@@ -211,16 +215,47 @@ impl GridWorld {
         };
 
         // Blocked cells by the rule: distance to some obstacle centre <= d_s. Only cells
-        // within floor(d_s) per axis of a centre can qualify.
+        // within floor(d_s) per axis of a centre can qualify. An extra obstacle (a point
+        // no arm pose reaches) blocks its own cell only, whatever d_s.
         let mut blocked = vec![false; n];
+        for &o in extra {
+            if let Some(s) = index(o) {
+                blocked[s] = true;
+            }
+        }
         let r = d_s.floor() as i32;
-        for &o in &obstacles {
+        for &o in &scenario.obstacles {
             for dx in -r..=r {
                 for dy in -r..=r {
                     for dz in -r..=r {
                         let c = [o[0] + dx, o[1] + dy, o[2] + dz];
                         if let Some(s) = index(c) {
                             if cell_distance(c, o) <= d_s {
+                                blocked[s] = true;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+
+        // Boxes in mm: cells whose centre is within d_s (mm) of the box by its rule.
+        let d_s_mm = scenario.terminal_safe_distance_in_mm();
+        let cell_mm = scenario.cell_mm;
+        for ob in &scenario.obstacle_boxes_mm {
+            let lo: [i32; 3] = std::array::from_fn(|i| {
+                (((ob.min_mm[i] - d_s_mm) / cell_mm).floor() as i32).max(bounds.min[i])
+            });
+            let hi: [i32; 3] = std::array::from_fn(|i| {
+                (((ob.max_mm[i] + d_s_mm) / cell_mm).ceil() as i32).min(bounds.max[i])
+            });
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        let c = [x, y, z];
+                        let p = c.map(|v| v as f64 * cell_mm);
+                        if let Some(s) = index(c) {
+                            if !blocked[s] && ob.terminal_distance_mm(p) <= d_s_mm {
                                 blocked[s] = true;
                             }
                         }

@@ -17,6 +17,7 @@
 //!   [`PathLearner`] (tabular Q-learning by default, BFS, or your own).
 //! - [`request`] — training and planning requests: the one place that checks the
 //!   options of a run and fills their defaults (the CLI and the bindings map onto it).
+//! - [`regrid`] — the same physical world at another cell size.
 //! - [`generator`] — random cluttered scenarios for benchmarks.
 //! - [`names`] — scenario names: files, built-ins, `generated:SEED`, `generated:A..B` lists.
 //! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
@@ -51,6 +52,7 @@ pub mod kinematics;
 pub mod names;
 pub mod planner;
 pub mod qlearning;
+pub mod regrid;
 pub mod replanning;
 pub mod request;
 pub mod scenario;

@@ -52,6 +52,16 @@
 //!   usually swaps between equally short paths whose Q-values are still settling, so
 //!   [`TrainResult::length_converged_episode`] also reports the first episode from which
 //!   the path's length no longer changed.
+//! - **`episodes_auto`** (`--episodes auto`, ours; the paper's fixed `episodes` and M stay
+//!   the default): `episodes` is then a cap, and the run follows three phases.
+//!   *Search*: `epsilon = epsilon_start` until the greedy path first reaches the target, after
+//!   episode `e1`. *Settle*: epsilon falls linearly to 0 over the next
+//!   `H = max(e1 + 1, AUTO_MIN_HORIZON)` episodes, `epsilon_start * (1 - (eta - e1) / H)`
+//!   for `eta` in `e1 + 1 ..= e1 + H` (the horizon grows with the time the world needed to
+//!   be solved, not a fixed M). *Confirm*: purely greedy; the run stops after the first
+//!   episode `eta >= e1 + H` after which the greedy path reaches the target and has not
+//!   changed for `H` episodes (tracked exactly after every episode). `epsilon_decay_episodes`
+//!   is not used. Hitting the cap ends the run like a fixed run of that length.
 //! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
 //!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
 //!   epsilon schedule) count from 0 again, and the converged episode is an index of this
@@ -104,7 +114,16 @@ pub struct TrainOptions {
     pub epsilon_decay_episodes: u32,
     /// Step cap of an episode, and of the greedy rollout.
     pub max_steps_per_episode: u32,
+    /// Train until the greedy path settles, with `episodes` as the cap (see the module docs).
+    #[serde(default)]
+    pub episodes_auto: bool,
 }
+
+/// Shortest settle horizon of `episodes_auto`, episodes.
+pub const AUTO_MIN_HORIZON: u32 = 100;
+
+/// Default episode cap of `episodes_auto` (`--episodes auto`).
+pub const AUTO_EPISODE_CAP: u32 = 1_000_000;
 
 impl TrainOptions {
     /// The scenario's `learning` section.
@@ -119,7 +138,15 @@ impl TrainOptions {
             epsilon_start: l.epsilon_start,
             epsilon_decay_episodes: l.epsilon_decay_episodes,
             max_steps_per_episode: l.max_steps_per_episode,
+            episodes_auto: false,
         }
+    }
+
+    /// `--episodes auto`: train until the greedy path settles, under [`AUTO_EPISODE_CAP`].
+    pub fn auto(mut self) -> Self {
+        self.episodes_auto = true;
+        self.episodes = AUTO_EPISODE_CAP;
+        self
     }
 
     /// Check the ranges; the error names the field.
@@ -578,8 +605,16 @@ fn train_impl(
     let chunk = episodes.div_ceil(100).max(1);
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
 
-    let mut steps_per_episode = Vec::with_capacity(episodes as usize);
-    let mut reached_per_episode = Vec::with_capacity(episodes as usize);
+    // A fixed run knows its length; an auto run grows its vectors as it goes.
+    let reserve = if opts.episodes_auto {
+        0
+    } else {
+        episodes as usize
+    };
+    let mut steps_per_episode = Vec::with_capacity(reserve);
+    let mut reached_per_episode = Vec::with_capacity(reserve);
+    // episodes_auto: the episode after which the greedy path first reached the target.
+    let mut first_reach: Option<u32> = None;
     let mut total_steps = 0u64;
 
     // Greedy-path tracking for the converged episode.
@@ -599,7 +634,23 @@ fn train_impl(
     for ep in 0..episodes {
         // Explore when a uniform u32 is below epsilon * 2^32 (i.e. u < epsilon for
         // u = k / 2^32 uniform in [0, 1)).
-        let explore_threshold = (opts.epsilon(ep) * 4_294_967_296.0).ceil() as u64;
+        let epsilon = if opts.episodes_auto {
+            match first_reach {
+                None => opts.epsilon_start,
+                Some(e1) => {
+                    let h = (e1 + 1).max(AUTO_MIN_HORIZON);
+                    let k = ep - e1;
+                    if k >= h {
+                        0.0
+                    } else {
+                        opts.epsilon_start * (1.0 - k as f64 / h as f64)
+                    }
+                }
+            }
+        } else {
+            opts.epsilon(ep)
+        };
+        let explore_threshold = (epsilon * 4_294_967_296.0).ceil() as u64;
         let mut s = start;
         let mut last_collided = NO_ACTION;
         let mut steps = 0u32;
@@ -682,6 +733,13 @@ fn train_impl(
         if let Some(p) = progress {
             if (ep + 1) % chunk == 0 || ep + 1 == episodes {
                 p(ep + 1);
+            }
+        }
+        if opts.episodes_auto && path_ok {
+            let e1 = *first_reach.get_or_insert(ep);
+            let h = (e1 + 1).max(AUTO_MIN_HORIZON);
+            if ep >= e1 + h && ep - last_change >= h {
+                break;
             }
         }
     }

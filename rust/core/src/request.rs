@@ -47,6 +47,12 @@ use crate::scenario::Scenario;
 pub struct TrainRequest {
     /// eta_set: learning episodes, `1..=u32::MAX`.
     pub episodes: Option<i128>,
+    /// `episodes = "auto"`: train until the greedy path reaches the target and stops
+    /// changing (the rule of [`crate::qlearning`]), under `episode_cap`.
+    pub episodes_auto: Option<bool>,
+    /// Episode cap of `episodes_auto`, `1..=u32::MAX` (default
+    /// [`crate::qlearning::AUTO_EPISODE_CAP`]); only with `episodes_auto`.
+    pub episode_cap: Option<i128>,
     /// Seed of the learner's generator, `0..=u64::MAX`.
     pub seed: Option<i128>,
     /// Both assisted strategies (eqs. 9 and 10) on or off; `detour` / `distance` then
@@ -130,9 +136,19 @@ pub const SEED: (&str, i128, i128) = ("seed", 0, u64::MAX as i128);
 /// See [`SEED`].
 pub const EPISODES: (&str, i128, i128) = ("episodes", 1, u32::MAX as i128);
 /// See [`SEED`].
+pub const EPISODE_CAP: (&str, i128, i128) = ("episode_cap", 1, u32::MAX as i128);
+/// See [`SEED`].
 pub const MAX_STEPS: (&str, i128, i128) = ("max_steps_per_episode", 1, u32::MAX as i128);
 /// See [`SEED`].
 pub const MAX_REPLANS: (&str, i128, i128) = ("max_replans", 0, u32::MAX as i128);
+
+/// `--episodes` text: a whole number of episodes, or `auto` (then `(None, true)`).
+pub fn parse_episodes(text: &str) -> Result<(Option<i128>, bool)> {
+    if text.trim() == "auto" {
+        return Ok((None, true));
+    }
+    parse_int(EPISODES, text).map(|n| (Some(n), false))
+}
 
 /// The integer written in `text` (a command-line value), or the error
 /// [`TrainRequest::resolve`] would give for a value out of `domain` (e.g. [`SEED`]).
@@ -153,6 +169,26 @@ impl TrainRequest {
         let mut opts = TrainOptions::from_scenario(s);
         if let Some(v) = checked(EPISODES, self.episodes)? {
             opts.episodes = v as u32;
+        }
+        let cap = checked(EPISODE_CAP, self.episode_cap)?;
+        if self.episodes_auto == Some(true) {
+            if let Some(n) = self.episodes {
+                return Err(Error::argument(
+                    "episodes",
+                    n,
+                    "is either a number of episodes or \"auto\", not both",
+                ));
+            }
+            opts = opts.auto();
+            if let Some(c) = cap {
+                opts.episodes = c as u32;
+            }
+        } else if let Some(c) = cap {
+            return Err(Error::argument(
+                "episode_cap",
+                c,
+                "applies only with episodes = \"auto\"",
+            ));
         }
         if let Some(v) = checked(SEED, self.seed)? {
             opts.seed = v as u64;
@@ -197,6 +233,46 @@ mod tests {
 
     fn s() -> Scenario {
         Scenario::builtin("paper_simple").unwrap()
+    }
+
+    #[test]
+    fn episodes_auto_and_its_cap() {
+        let s = s();
+        assert_eq!(parse_episodes("auto").unwrap(), (None, true));
+        assert_eq!(parse_episodes("12").unwrap(), (Some(12), false));
+        assert!(parse_episodes("often").is_err());
+        let auto = TrainRequest {
+            episodes_auto: Some(true),
+            ..Default::default()
+        };
+        let o = auto.resolve(&s).unwrap();
+        assert!(o.episodes_auto);
+        assert_eq!(o.episodes, crate::qlearning::AUTO_EPISODE_CAP);
+        let capped = TrainRequest {
+            episode_cap: Some(5000),
+            ..auto.clone()
+        };
+        assert_eq!(capped.resolve(&s).unwrap().episodes, 5000);
+        let zero = TrainRequest {
+            episode_cap: Some(0),
+            ..auto.clone()
+        };
+        assert!(zero
+            .resolve(&s)
+            .unwrap_err()
+            .to_string()
+            .contains("`episode_cap` = 0"));
+        let cap_alone = TrainRequest {
+            episode_cap: Some(10),
+            ..Default::default()
+        };
+        let e = cap_alone.resolve(&s).unwrap_err().to_string();
+        assert!(e.contains("only with episodes = \"auto\""), "{e}");
+        let both = TrainRequest {
+            episodes: Some(10),
+            ..auto
+        };
+        assert!(both.resolve(&s).is_err());
     }
 
     #[test]

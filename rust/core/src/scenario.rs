@@ -12,6 +12,12 @@
 //! Field names say what a value is; the paper's symbols are in each field's doc line and in
 //! `docs/SCENARIOS.md`. Distances between cells are in cells (grid unit = `cell_mm` mm).
 //!
+//! **Physical worlds.** Besides the paper's unit cubes on cells (`obstacles`), a scenario may
+//! state obstacles as axis-aligned boxes in mm ([`ObstacleBox`], `obstacle_boxes_mm`) and its
+//! safe distances in mm (`terminal_safe_distance_mm`, `arm_safe_distance_mm`), independent of
+//! `cell_mm`; [`crate::regrid`] writes the same world at another cell size. Which cells a box
+//! blocks for the terminal is [`ObstacleBox::terminal_distance_mm`] `<= d_s` (mm).
+//!
 //! ```
 //! use sixaxis_core::scenario::Scenario;
 //! let s = Scenario::load("paper_simple").unwrap();
@@ -73,6 +79,108 @@ impl Bounds {
     /// Number of cells in the box.
     pub fn volume(&self) -> usize {
         self.size().iter().product()
+    }
+}
+
+/// Where the safe distances to an [`ObstacleBox`] are measured from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DistanceTo {
+    /// From the box itself (0 inside it): exact geometry, for boxes of any shape.
+    #[default]
+    Surface,
+    /// From the box's centre point: the paper's reading of its cubes (eqs. 5 and 11 measure
+    /// to an obstacle's centre). Only for cubes; [`crate::regrid`] writes the paper's cubes so.
+    Centre,
+}
+
+/// An obstacle as an axis-aligned box in mm, independent of the grid.
+///
+/// The terminal collides in a cell whose centre lies within `terminal_safe_distance` of the
+/// box, measured as [`DistanceTo`] says ([`ObstacleBox::terminal_distance_mm`]). The arm:
+/// under the centres model, every segment keeps more than `arm_safe_distance` from the box
+/// (its centre for `centre` boxes, eq. 11; the box itself for `surface` boxes); under the
+/// capsules model, the exact gap between link capsules and the box exceeds `margin_mm`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleBox {
+    /// Lowest corner, mm.
+    pub min_mm: [f64; 3],
+    /// Highest corner, mm.
+    pub max_mm: [f64; 3],
+    /// Where safe distances are measured from (default `surface`).
+    #[serde(default, skip_serializing_if = "DistanceTo::is_surface")]
+    pub distance_to: DistanceTo,
+}
+
+impl DistanceTo {
+    fn is_surface(&self) -> bool {
+        *self == DistanceTo::Surface
+    }
+}
+
+impl ObstacleBox {
+    /// The paper's cube of edge `cell_mm` centred on cell `c`, measured from its centre.
+    pub fn paper_cube(c: Cell, cell_mm: f64) -> ObstacleBox {
+        let h = 0.5 * cell_mm;
+        let centre = c.map(|v| v as f64 * cell_mm);
+        ObstacleBox {
+            min_mm: centre.map(|v| v - h),
+            max_mm: centre.map(|v| v + h),
+            distance_to: DistanceTo::Centre,
+        }
+    }
+
+    /// Centre of the box, mm.
+    pub fn centre_mm(&self) -> [f64; 3] {
+        std::array::from_fn(|i| 0.5 * (self.min_mm[i] + self.max_mm[i]))
+    }
+
+    /// Half its edge along each axis, mm.
+    pub fn half_extents_mm(&self) -> [f64; 3] {
+        std::array::from_fn(|i| 0.5 * (self.max_mm[i] - self.min_mm[i]))
+    }
+
+    /// Distance (mm) from point `p` (mm) to the box as the terminal's rule measures it: to
+    /// the centre for `centre` boxes, to the box (0 inside or on it) for `surface` boxes.
+    #[inline]
+    pub fn terminal_distance_mm(&self, p: [f64; 3]) -> f64 {
+        let d2: f64 = match self.distance_to {
+            DistanceTo::Centre => {
+                let c = self.centre_mm();
+                (0..3).map(|i| (p[i] - c[i]) * (p[i] - c[i])).sum()
+            }
+            DistanceTo::Surface => (0..3)
+                .map(|i| {
+                    let d = (self.min_mm[i] - p[i]).max(p[i] - self.max_mm[i]).max(0.0);
+                    d * d
+                })
+                .sum(),
+        };
+        d2.sqrt()
+    }
+
+    fn check(&self, field: &str) -> Result<()> {
+        let all = self.min_mm.iter().chain(&self.max_mm);
+        if !all.clone().all(|v| v.is_finite()) || (0..3).any(|i| self.min_mm[i] > self.max_mm[i]) {
+            return Err(Error::invalid(
+                field,
+                format!("min_mm {:?} max_mm {:?}", self.min_mm, self.max_mm),
+                "corners must be finite with min_mm <= max_mm on every axis",
+            ));
+        }
+        if self.distance_to == DistanceTo::Centre {
+            let h = self.half_extents_mm();
+            let tol = 1e-9 * h[0].abs().max(1.0);
+            if (h[1] - h[0]).abs() > tol || (h[2] - h[0]).abs() > tol {
+                return Err(Error::invalid(
+                    field,
+                    format!("min_mm {:?} max_mm {:?}", self.min_mm, self.max_mm),
+                    "a box measured from its centre (distance_to: centre) must be a cube",
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -317,10 +425,23 @@ pub struct Scenario {
     pub target: Cell,
     /// Obstacle cells: unit cubes centred on these cells.
     pub obstacles: Vec<Cell>,
+    /// Obstacles as boxes in mm, independent of the grid (beside `obstacles`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacle_boxes_mm: Vec<ObstacleBox>,
     /// d_s (eq. 5): the terminal collides when its distance to an obstacle centre is <= this, cells.
+    /// May be left out of a file that gives `terminal_safe_distance_mm`.
+    #[serde(default = "unset_distance")]
     pub terminal_safe_distance: f64,
     /// d_p (eq. 11): every arm segment must stay farther than this from every obstacle centre, cells.
+    /// May be left out of a file that gives `arm_safe_distance_mm`.
+    #[serde(default = "unset_distance")]
     pub arm_safe_distance: f64,
+    /// d_s in mm (the physical form); when given, `terminal_safe_distance` = this / `cell_mm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terminal_safe_distance_mm: Option<f64>,
+    /// d_p in mm (the physical form); when given, `arm_safe_distance` = this / `cell_mm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub arm_safe_distance_mm: Option<f64>,
     /// Reward parameters.
     #[serde(default)]
     pub rewards: Rewards,
@@ -337,6 +458,11 @@ pub struct Scenario {
 
 fn fmt_cell(c: Cell) -> String {
     format!("[{}, {}, {}]", c[0], c[1], c[2])
+}
+
+/// Marks a safe distance in cells left out of a file (filled in from its mm form).
+fn unset_distance() -> f64 {
+    f64::NAN
 }
 
 impl Scenario {
@@ -380,8 +506,9 @@ impl Scenario {
 
     /// Parse and validate scenario JSON.
     pub fn from_json(text: &str) -> Result<Scenario> {
-        let s: Scenario =
+        let mut s: Scenario =
             serde_json::from_str(text).map_err(|e| Error::ScenarioParse(e.to_string()))?;
+        s.fill_distances_from_mm()?;
         s.validate()?;
         Ok(s)
     }
@@ -399,6 +526,73 @@ impl Scenario {
     /// Position of a cell's centre, mm.
     pub fn cell_centre_mm(&self, c: Cell) -> nalgebra::Vector3<f64> {
         cell_centre_mm(c, self.cell_mm)
+    }
+
+    /// A safe distance in cells left out of a file takes its mm form / `cell_mm`; one given
+    /// in neither form is an error naming both fields.
+    fn fill_distances_from_mm(&mut self) -> Result<()> {
+        let cell_mm = self.cell_mm;
+        for (field, cells, mm) in [
+            (
+                "terminal_safe_distance",
+                &mut self.terminal_safe_distance,
+                self.terminal_safe_distance_mm,
+            ),
+            (
+                "arm_safe_distance",
+                &mut self.arm_safe_distance,
+                self.arm_safe_distance_mm,
+            ),
+        ] {
+            if !cells.is_nan() {
+                continue;
+            }
+            match mm {
+                Some(mm) if cell_mm.is_finite() && cell_mm > 0.0 => *cells = mm / cell_mm,
+                Some(_) => {}
+                None => {
+                    return Err(Error::ScenarioParse(format!(
+                        "missing field `{field}` (cells) or `{field}_mm` (mm)"
+                    )))
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// d_s in mm: `terminal_safe_distance_mm` if given, else `terminal_safe_distance * cell_mm`.
+    pub fn terminal_safe_distance_in_mm(&self) -> f64 {
+        self.terminal_safe_distance_mm
+            .unwrap_or(self.terminal_safe_distance * self.cell_mm)
+    }
+
+    /// d_p in mm: `arm_safe_distance_mm` if given, else `arm_safe_distance * cell_mm`.
+    pub fn arm_safe_distance_in_mm(&self) -> f64 {
+        self.arm_safe_distance_mm
+            .unwrap_or(self.arm_safe_distance * self.cell_mm)
+    }
+
+    /// The obstacle that blocks cell `c` for the terminal, if any, described for an error
+    /// message: a paper cube whose centre is within `terminal_safe_distance` cells, or a box
+    /// within `terminal_safe_distance` mm by [`ObstacleBox::terminal_distance_mm`].
+    pub fn terminal_blocker(&self, c: Cell) -> Option<String> {
+        let d_s = self.terminal_safe_distance;
+        for o in &self.obstacles {
+            let d2: i64 = (0..3)
+                .map(|i| (c[i] - o[i]) as i64 * (c[i] - o[i]) as i64)
+                .sum();
+            if (d2 as f64).sqrt() <= d_s {
+                return Some(format!("obstacle {}", fmt_cell(*o)));
+            }
+        }
+        let d_s_mm = self.terminal_safe_distance_in_mm();
+        let p = c.map(|v| v as f64 * self.cell_mm);
+        self.obstacle_boxes_mm
+            .iter()
+            .enumerate()
+            .find_map(|(i, b)| {
+                (b.terminal_distance_mm(p) <= d_s_mm).then(|| format!("obstacle_boxes_mm[{i}]"))
+            })
     }
 
     /// Check every field; the error names the field and the value.
@@ -447,6 +641,9 @@ impl Scenario {
                 ));
             }
         }
+        for (i, ob) in self.obstacle_boxes_mm.iter().enumerate() {
+            ob.check(&format!("obstacle_boxes_mm[{i}]"))?;
+        }
         if self.start == self.target {
             return Err(Error::invalid(
                 "target",
@@ -456,14 +653,46 @@ impl Scenario {
         }
         finite_pos("terminal_safe_distance", self.terminal_safe_distance, true)?;
         finite_pos("arm_safe_distance", self.arm_safe_distance, true)?;
-        // A terminal threshold of 1 or more would make the terminal collide with every
-        // free neighbour of an obstacle, and the start/target checks below rely on < 1.
-        if self.terminal_safe_distance >= 1.0 {
-            return Err(Error::invalid(
-                "terminal_safe_distance",
+        for (field, cells, mm) in [
+            (
+                "terminal_safe_distance_mm",
                 self.terminal_safe_distance,
-                "must be < 1 cell (obstacles are unit cubes on integer cells)",
-            ));
+                self.terminal_safe_distance_mm,
+            ),
+            (
+                "arm_safe_distance_mm",
+                self.arm_safe_distance,
+                self.arm_safe_distance_mm,
+            ),
+        ] {
+            let Some(mm) = mm else { continue };
+            finite_pos(field, mm, true)?;
+            if (cells * self.cell_mm - mm).abs() > 1e-9 * mm.max(1.0) {
+                return Err(Error::invalid(
+                    field,
+                    mm,
+                    format!(
+                        "disagrees with `{}` = {cells} cells of {} mm; give one of the two, or both equal",
+                        field.trim_end_matches("_mm"),
+                        self.cell_mm
+                    ),
+                ));
+            }
+        }
+        // The paper's scenarios have d_s < 1 cell: each cube blocks its own cell. A larger
+        // d_s (e.g. a paper world re-gridded to finer cells) blocks a ball of cells around
+        // each centre; the start and the target must stay free.
+        for (field, c) in [("start", self.start), ("target", self.target)] {
+            if let Some(what) = self.terminal_blocker(c) {
+                return Err(Error::invalid(
+                    field,
+                    fmt_cell(c),
+                    format!(
+                        "is blocked: within terminal_safe_distance ({} mm) of {what}",
+                        self.terminal_safe_distance_in_mm()
+                    ),
+                ));
+            }
         }
         let r = &self.rewards;
         for (f, v) in [

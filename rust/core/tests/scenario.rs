@@ -92,10 +92,30 @@ fn nan_and_negative_values_are_rejected() {
         "-40",
     );
     expect_invalid(|v| v["cell_mm"] = json!(0.0), "cell_mm", "0");
+    // d_s may exceed a cell (a re-gridded paper world), but then the target (0,3,0) lies
+    // within 1.5 cells of the cube at (-1,3,1): the error names the target.
     expect_invalid(
         |v| v["terminal_safe_distance"] = json!(1.5),
-        "terminal_safe_distance",
-        "1.5",
+        "target",
+        "[0, 3, 0]",
+    );
+    expect_invalid(
+        |v| v["terminal_safe_distance_mm"] = json!(50.0),
+        "terminal_safe_distance_mm",
+        "50",
+    );
+    expect_invalid(
+        |v| v["obstacle_boxes_mm"] = json!([{"min_mm": [0, 0, 0], "max_mm": [-1, 5, 5]}]),
+        "obstacle_boxes_mm[0]",
+        "min_mm",
+    );
+    expect_invalid(
+        |v| {
+            v["obstacle_boxes_mm"] =
+                json!([{"min_mm": [0, 0, 0], "max_mm": [10, 20, 10], "distance_to": "centre"}])
+        },
+        "obstacle_boxes_mm[0]",
+        "max_mm",
     );
     expect_invalid(
         |v| v["learning"]["alpha"] = json!(0.0),

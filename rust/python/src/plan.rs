@@ -293,13 +293,14 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
 /// is returned with ``success=False`` and a ``failure`` reason; bad arguments raise
 /// :class:`InvalidArgumentError`. The GIL is released while the core works.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, seed=None, episodes=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, max_replans=None, learner=None))]
+#[pyo3(signature = (scenario=None, *, seed=None, episodes=None, episode_cap=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, max_replans=None, learner=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
     seed: Option<&Bound<'_, PyAny>>,
     episodes: Option<&Bound<'_, PyAny>>,
+    episode_cap: Option<&Bound<'_, PyAny>>,
     assist: Option<&Bound<'_, PyAny>>,
     detour: Option<&Bound<'_, PyAny>>,
     distance: Option<&Bound<'_, PyAny>>,
@@ -312,6 +313,7 @@ pub fn plan(
         train: train_request(
             py,
             episodes,
+            episode_cap,
             seed,
             assist,
             detour,

@@ -3,8 +3,10 @@
 //! keywords are the core's, shared with the `sixaxis` CLI.
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyInt};
-use sixaxis_core::request::{in_domain, int_domain, TrainRequest, EPISODES, MAX_STEPS, SEED};
+use pyo3::types::{PyBool, PyInt, PyString};
+use sixaxis_core::request::{
+    in_domain, int_domain, TrainRequest, EPISODES, EPISODE_CAP, MAX_STEPS, SEED,
+};
 
 use crate::convert::repr;
 use crate::errors::invalid_argument;
@@ -62,14 +64,26 @@ pub fn bool_kw(
 pub fn train_request(
     py: Python<'_>,
     episodes: Option<&Bound<'_, PyAny>>,
+    episode_cap: Option<&Bound<'_, PyAny>>,
     seed: Option<&Bound<'_, PyAny>>,
     assist: Option<&Bound<'_, PyAny>>,
     detour: Option<&Bound<'_, PyAny>>,
     distance: Option<&Bound<'_, PyAny>>,
     max_steps_per_episode: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<TrainRequest> {
+    // `episodes="auto"`: train until the greedy path settles (the core's rule).
+    let auto = match episodes {
+        Some(e) if e.is_instance_of::<PyString>() => e.extract::<String>()? == "auto",
+        _ => false,
+    };
     Ok(TrainRequest {
-        episodes: int_kw(py, EPISODES, episodes)?,
+        episodes: if auto {
+            None
+        } else {
+            int_kw(py, EPISODES, episodes)?
+        },
+        episodes_auto: auto.then_some(true),
+        episode_cap: int_kw(py, EPISODE_CAP, episode_cap)?,
         seed: int_kw(py, SEED, seed)?,
         assist: bool_kw(py, "assist", assist)?,
         detour: bool_kw(py, "detour", detour)?,

@@ -136,6 +136,13 @@ impl PyScenario {
         from_dict_inner(d).map(PyScenario::new)
     }
 
+    /// The same physical world at ``cell_mm`` mm cells (``sixaxis regrid``): obstacle boxes
+    /// and safe distances kept in mm, start and target at the same points; raises
+    /// :class:`InvalidArgumentError` if a point is not a cell centre of the new grid.
+    fn regrid(&self, py: Python<'_>, cell_mm: f64) -> PyResult<Self> {
+        run_attached(py, || sixaxis_core::regrid::regrid(&self.inner, cell_mm)).map(PyScenario::new)
+    }
+
     /// Pretty JSON text.
     fn to_json(&self) -> String {
         self.inner.to_json()

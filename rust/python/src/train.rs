@@ -202,12 +202,13 @@ fn q_from_array(
 /// own (after ``assist``). ``progress(episodes_done)`` is called about 100 times; an
 /// exception it raises is re-raised after training. The GIL is released while learning.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, episodes=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
+#[pyo3(signature = (scenario=None, *, episodes=None, episode_cap=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
     episodes: Option<&Bound<'_, PyAny>>,
+    episode_cap: Option<&Bound<'_, PyAny>>,
     seed: Option<&Bound<'_, PyAny>>,
     assist: Option<&Bound<'_, PyAny>>,
     detour: Option<&Bound<'_, PyAny>>,
@@ -221,6 +222,7 @@ pub fn train(
     let req = train_request(
         py,
         episodes,
+        episode_cap,
         seed,
         assist,
         detour,
