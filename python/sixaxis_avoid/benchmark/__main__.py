@@ -85,6 +85,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     rep.add_argument("--results", type=Path, default=Path("results/bench/v1"))
     rep.add_argument("--out", type=Path, default=Path("docs/BENCHMARKS.md"))
     rep.add_argument("--figures-dir", type=Path, help="default: OUT's folder / figures/bench")
+    rep.add_argument("--reps", type=int, default=2000, help="bootstrap replications")
 
     ls = sub.add_parser("list", help="suites, learners and a suite's tasks")
     ls.add_argument("--suite", default="v1")
@@ -93,7 +94,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     for name in ("budget_scale",):
         if getattr(args, name, 1.0) <= 0:
             p.error(f"--{name.replace('_', '-')} must be > 0")
-    for name in ("trials", "parallel_trials", "num_cpus"):
+    for name in ("trials", "parallel_trials", "num_cpus", "reps"):
         v = getattr(args, name, None)
         if v is not None and v < 1:
             p.error(f"--{name.replace('_', '-')} must be >= 1")
@@ -196,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.cmd == "report":
             from sixaxis_avoid.benchmark.report import write_report
 
-            write_report(args.results, args.out, args.figures_dir)
+            write_report(args.results, args.out, args.figures_dir, reps=args.reps)
             print(f"wrote {args.out}", file=sys.stderr)
             return 0
     except (SuiteError, lmod.LearnerError) as e:

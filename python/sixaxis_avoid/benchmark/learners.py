@@ -276,8 +276,12 @@ class NativeQ(Learner):
                 "cpu_time_s": sum(x.cpu for x in runs[:first]) + cpu,
             }
         total = int(offsets[-1])
+        # The suite's checkpoints are sized for the deep learners' budget; add as many on a
+        # geometric grid up to this run's own length.
+        own = np.geomspace(max(1, total // 100), total, max(len(ctx.checkpoints), 2))
+        grid = sorted({*ctx.checkpoints, *own.round().astype(np.int64).tolist()})
         done_at: set[int] = set()
-        for c in [*[c for c in ctx.checkpoints if c < total], total]:
+        for c in [*[c for c in grid if c < total], total]:
             i = min(int(np.searchsorted(offsets, c, side="right")) - 1, len(runs) - 1)
             r = runs[i]
             k = int(np.searchsorted(r.cum, c - offsets[i], side="right"))
@@ -458,6 +462,9 @@ class SB3Learner(Learner):
         if self._goal and self.off_policy:
             from stable_baselines3 import HerReplayBuffer
 
+            # HER cannot sample before an episode has ended: learning starts after one.
+            cap = int(env_kw.get("max_episode_steps", ctx.world.max_steps_per_episode))
+            hp["learning_starts"] = max(int(hp.get("learning_starts", 100)), cap)
             hp["replay_buffer_class"] = HerReplayBuffer
             hp["replay_buffer_kwargs"] = {
                 "n_sampled_goal": int(hp.pop("her_n_sampled_goal", 4)),

@@ -59,8 +59,10 @@ def plan_runs(
     hyperparams: str | Path = "v1",
     budget_scale: float = 1.0,
     overrides: dict[str, dict[str, Any]] | None = None,
+    tag: str | None = None,
 ) -> list[dict[str, Any]]:
-    """The specs of a study's runs: learners x tasks x seeds."""
+    """The specs of a study's runs: learners x tasks x seeds (``tag`` prefixes their result
+    files, e.g. a tuning trial's number)."""
     hp_file = hpmod.load(hyperparams)
     specs = []
     for learner in learners:
@@ -92,6 +94,7 @@ def plan_runs(
                         if family != "deep"
                         else hpmod.status_for(hp_file, learner),
                         "max_replans": int(cap),
+                        **({"tag": tag} if tag else {}),
                     }
                 )
     return specs
@@ -103,6 +106,8 @@ def spec_hash(spec: dict[str, Any]) -> str:
 
 def run_key(spec: dict[str, Any]) -> str:
     raw = f"{spec['task']['id']}__{spec['learner']}__s{spec['seed']}"
+    if spec.get("tag"):
+        raw = f"{spec['tag']}__{raw}"
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", raw)
 
 
@@ -225,6 +230,10 @@ def finished(out_dir: Path, spec: dict[str, Any]) -> bool:
         return json.loads(p.read_text()).get("spec_hash") == spec_hash(spec)
     except (OSError, json.JSONDecodeError):
         return False
+
+
+def load_record(out_dir: Path, spec: dict[str, Any]) -> dict[str, Any]:
+    return json.loads(run_path(out_dir, spec).read_text())
 
 
 def write_run(out_dir: Path, record: dict[str, Any]) -> Path:

@@ -58,9 +58,14 @@ def curve_on(grid: np.ndarray, curve: list[dict[str, Any]], key: str = "score") 
     return np.where(idx >= 0, ys[np.clip(idx, 0, None)], 0.0)
 
 
-def aggregates(scores: dict[str, np.ndarray], seed: int = 0) -> dict[str, Any]:
+def aggregates(
+    scores: dict[str, np.ndarray],
+    seed: int = 0,
+    reps: int = REPS,
+    poi_exclude: tuple[str, ...] = (),
+) -> dict[str, Any]:
     """IQM, mean and optimality gap with 95% CIs; performance profiles; probability of
-    improvement for every ordered pair of learners."""
+    improvement for every ordered pair of learners (but those in ``poi_exclude``)."""
     from rliable import metrics
 
     rly = rliable_library()
@@ -75,20 +80,23 @@ def aggregates(scores: dict[str, np.ndarray], seed: int = 0) -> dict[str, Any]:
         )
 
     seeded(seed)
-    point, ci = rly.get_interval_estimates(scores, agg, reps=REPS)
+    point, ci = rly.get_interval_estimates(scores, agg, reps=reps)
     seeded(seed)
-    profiles, profile_cis = rly.create_performance_profile(scores, TAUS, reps=REPS)
-    names = list(scores)
-    pairs = {f"{a},{b}": (scores[a], scores[b]) for a in names for b in names if a != b}
+    profiles, profile_cis = rly.create_performance_profile(scores, TAUS, reps=reps)
+    names = [k for k in scores if k not in poi_exclude]
+    # P(Y > X) = 1 - P(X > Y): one bootstrap per unordered pair.
+    pairs = {
+        f"{a},{b}": (scores[a], scores[b]) for i, a in enumerate(names) for b in names[i + 1 :]
+    }
     poi_point: dict[str, Any] = {}
     poi_ci: dict[str, Any] = {}
     if pairs:
         seeded(seed)
         poi_point, poi_ci = rly.get_interval_estimates(
-            pairs, metrics.probability_of_improvement, reps=REPS
+            pairs, metrics.probability_of_improvement, reps=reps
         )
     out: dict[str, Any] = {"learners": {}, "taus": TAUS.tolist(), "poi": {}}
-    for k in names:
+    for k in scores:
         out["learners"][k] = {
             "iqm": float(point[k][0]),
             "iqm_ci": [float(ci[k][0][0]), float(ci[k][1][0])],
@@ -100,19 +108,20 @@ def aggregates(scores: dict[str, np.ndarray], seed: int = 0) -> dict[str, Any]:
             "profile_ci": [profile_cis[k][0].tolist(), profile_cis[k][1].tolist()],
         }
     for pair in pairs:
-        out["poi"][pair] = {
-            "p": float(np.asarray(poi_point[pair]).ravel()[0]),
-            "ci": [float(np.ravel(poi_ci[pair][0])[0]), float(np.ravel(poi_ci[pair][1])[0])],
-        }
+        p = float(np.asarray(poi_point[pair]).ravel()[0])
+        lo, hi = float(np.ravel(poi_ci[pair][0])[0]), float(np.ravel(poi_ci[pair][1])[0])
+        a, b = pair.split(",")
+        out["poi"][pair] = {"p": p, "ci": [lo, hi]}
+        out["poi"][f"{b},{a}"] = {"p": 1.0 - p, "ci": [1.0 - hi, 1.0 - lo]}
     return out
 
 
 def iqm_curves(
     runs: list[dict[str, Any]], learners: list[str], tasks: list[str], seeds: list[int],
-    grid: np.ndarray, seed: int = 0,
+    grid: np.ndarray, seed: int = 0, reps: int = REPS // 4,
 ) -> dict[str, Any]:  # fmt: skip
     """IQM of the score over (seeds, tasks) at each env step of ``grid``, with 95% CIs."""
-    from rliable import metrics
+    import scipy.stats
 
     rly = rliable_library()
     by = {(r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]): r for r in runs}
@@ -124,12 +133,21 @@ def iqm_curves(
     }
 
     def iqm_at(x: np.ndarray) -> np.ndarray:
-        return np.array([metrics.aggregate_iqm(x[..., j]) for j in range(x.shape[-1])])
+        # rliable's aggregate_iqm at every grid point at once (the same trimmed mean).
+        return scipy.stats.trim_mean(x.reshape(-1, x.shape[-1]), proportiontocut=0.25, axis=0)
 
     seeded(seed)
-    point, ci = rly.get_interval_estimates(data, iqm_at, reps=max(REPS // 4, 200))
+    point, ci = rly.get_interval_estimates(data, iqm_at, reps=reps)
     return {
-        lr: {"iqm": point[lr].tolist(), "lo": ci[lr][0].tolist(), "hi": ci[lr][1].tolist()}
+        lr: {
+            "iqm": point[lr].tolist(),
+            "lo": ci[lr][0].tolist(),
+            "hi": ci[lr][1].tolist(),
+            # The curve is defined up to the longest run (later values are carried forward).
+            "max_env_steps": max(
+                by[(lr, t, s)]["result"]["curve"][-1]["env_steps"] for t in tasks for s in seeds
+            ),
+        }
         for lr in learners
     }
 
