@@ -211,8 +211,16 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
         "spec": spec,
         "result": result,
         "timing": timing,
-        "host": {"hostname": socket.gethostname(), "pid": os.getpid()},
+        "host": {"hostname": socket.gethostname(), "pid": os.getpid(), "ray_node": ray_node()},
     }
+
+
+def ray_node() -> str | None:
+    """The Ray node this process runs on (None outside Ray)."""
+    ray = sys.modules.get("ray")
+    if ray is None or not ray.is_initialized():
+        return None
+    return ray.get_runtime_context().get_node_id()
 
 
 # ------------------------------------------------------------------------------------------
