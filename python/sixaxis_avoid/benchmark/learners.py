@@ -442,9 +442,12 @@ class SB3Learner(Learner):
 
     family = "deep"
     off_policy: ClassVar[bool] = False
+    #: ``module:Class`` of the algorithm.
+    algorithm_path: ClassVar[str] = ""
 
     def algorithm(self) -> Any:
-        raise NotImplementedError
+        module, _, name = self.algorithm_path.partition(":")
+        return getattr(importlib.import_module(module), name)
 
     def learn(self, ctx: RunContext) -> None:
         import torch
@@ -502,44 +505,28 @@ class SB3Learner(Learner):
 
 class DQN(SB3Learner):
     title = "Stable-Baselines3 DQN (HER on goal tasks)"
+    algorithm_path = "stable_baselines3:DQN"
     off_policy = True
     defaults = DQN_DEFAULTS
-
-    def algorithm(self) -> Any:
-        from stable_baselines3 import DQN as Algo
-
-        return Algo
 
 
 class QRDQN(SB3Learner):
     title = "sb3-contrib QR-DQN (HER on goal tasks)"
+    algorithm_path = "sb3_contrib:QRDQN"
     off_policy = True
     defaults = DQN_DEFAULTS  # DQN's values; sb3-contrib's for the quantiles
-
-    def algorithm(self) -> Any:
-        from sb3_contrib import QRDQN as Algo
-
-        return Algo
 
 
 class PPO(SB3Learner):
     title = "Stable-Baselines3 PPO"
+    algorithm_path = "stable_baselines3:PPO"
     defaults = PPO_DEFAULTS
-
-    def algorithm(self) -> Any:
-        from stable_baselines3 import PPO as Algo
-
-        return Algo
 
 
 class A2C(SB3Learner):
     title = "Stable-Baselines3 A2C"
+    algorithm_path = "stable_baselines3:A2C"
     defaults = A2C_DEFAULTS
-
-    def algorithm(self) -> Any:
-        from stable_baselines3 import A2C as Algo
-
-        return Algo
 
 
 BUILTIN: dict[str, type[Learner]] = {

@@ -156,6 +156,16 @@ def median_or_none(xs: list[float]) -> float | None:
     return float(np.median(xs)) if xs else None
 
 
+def milestone(runs: list[dict[str, Any]], key: str, prefix: str) -> dict[str, float | None]:
+    """Medians of env steps, wall and CPU seconds to a milestone (first success,
+    convergence) over the runs that reached it."""
+    return {
+        f"{prefix}_steps": median_or_none([r["result"][key]["env_steps"] for r in runs]),
+        f"{prefix}_wall_s": median_or_none([r["timing"][key]["wall_time_s"] for r in runs]),
+        f"{prefix}_cpu_s": median_or_none([r["timing"][key]["cpu_time_s"] for r in runs]),
+    }
+
+
 def per_learner(runs: list[dict[str, Any]]) -> dict[str, Any]:
     """Plain figures over a set of runs: success rate, score, and the medians (over the runs
     that got there) of env steps and seconds to the first success and to convergence."""
@@ -173,25 +183,9 @@ def per_learner(runs: list[dict[str, Any]]) -> dict[str, Any]:
         "wall_time_s_median": median_or_none([r["timing"]["wall_time_s"] for r in runs]),
         "cpu_time_s_median": median_or_none([r["timing"]["cpu_time_s"] for r in runs]),
         "first_success_rate": len(firsts) / n if n else None,
-        "first_success_steps": median_or_none(
-            [r["result"]["first_success"]["env_steps"] for r in firsts]
-        ),
-        "first_success_wall_s": median_or_none(
-            [r["timing"]["first_success"]["wall_time_s"] for r in firsts]
-        ),
-        "first_success_cpu_s": median_or_none(
-            [r["timing"]["first_success"]["cpu_time_s"] for r in firsts]
-        ),
+        **milestone(firsts, "first_success", "first_success"),
         "convergence_rate": len(convs) / n if n else None,
-        "convergence_steps": median_or_none(
-            [r["result"]["convergence"]["env_steps"] for r in convs]
-        ),
-        "convergence_wall_s": median_or_none(
-            [r["timing"]["convergence"]["wall_time_s"] for r in convs]
-        ),
-        "convergence_cpu_s": median_or_none(
-            [r["timing"]["convergence"]["cpu_time_s"] for r in convs]
-        ),
+        **milestone(convs, "convergence", "convergence"),
         "algorithm1_pass_rate": float(np.mean([bool(a and a["complete"]) for a in alg1]))
         if alg1
         else None,
