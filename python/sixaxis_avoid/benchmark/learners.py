@@ -230,16 +230,27 @@ class RetrainPerRound:
 
     def learn_path(self, scenario: Any, seed: int) -> dict[str, Any]:
         base = self.ctx.task.scenario
-        if scenario == base:
-            p = self.ctx.points[-1]["paths"][0]
-            return {"path": p, "total_steps": self.ctx.env_steps}
-        fresh = type(self.learner)(self.learner.hyperparams)
-        ctx = RunContext(
-            self.ctx.task, seed, self.ctx.budget, fresh.hyperparams, [], fresh, scenario
-        )
-        fresh.learn(ctx)
-        path = fresh.greedy_path(scenario)
-        return {"path": path_cells(path), "total_steps": ctx.env_steps}
+        if same_world(scenario, base):  # round 0: this run's own path
+            path = self.ctx.points[-1]["paths"][0]
+            steps = self.ctx.env_steps
+        else:
+            fresh = type(self.learner)(self.learner.hyperparams)
+            ctx = RunContext(
+                self.ctx.task, seed, self.ctx.budget, fresh.hyperparams, [], fresh, scenario
+            )
+            fresh.learn(ctx)
+            path, steps = fresh.greedy_path(scenario), ctx.env_steps
+        cells = None if path is None else [tuple(int(v) for v in c) for c in path]
+        return {"path": cells, "total_steps": int(steps)}
+
+
+def same_world(a: Any, b: Any) -> bool:
+    """Same start, target and obstacle set (a re-plan round adds obstacles)."""
+    return (
+        tuple(a.start) == tuple(b.start)
+        and tuple(a.target) == tuple(b.target)
+        and {tuple(c) for c in a.obstacles} == {tuple(c) for c in b.obstacles}
+    )
 
 
 # ------------------------------------------------------------------------------------------
