@@ -71,7 +71,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     t = sub.add_parser("tune", help="Optuna study per deep learner on the tuning tasks")
     t.add_argument("--suite", default="v1")
     t.add_argument("--learners", default=",".join(("dqn", "qrdqn", "ppo", "a2c")))
-    t.add_argument("--trials", type=int, default=30, help="trials per learner")
+    t.add_argument("--trials", type=int, default=10, help="trials per learner")
     t.add_argument("--seeds", help="default: the suite's tuning seeds")
     t.add_argument("--budget-scale", type=float, default=1.0)
     t.add_argument("--parallel-trials", type=int, default=2, help="trials run at once")

@@ -89,7 +89,7 @@ def suggest(trial: Any, learner: str) -> dict[str, Any]:
             "exploration_final_eps": f("exploration_final_eps", 0.01, 0.2),
         }
         if learner == "qrdqn":
-            hp["n_quantiles"] = c("n_quantiles", [25, 50, 100, 200])
+            hp["n_quantiles"] = c("n_quantiles", [25, 50, 100])
         return hp
     if learner == "ppo":
         return {

@@ -442,10 +442,10 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
         "",
         "```bash",
         "pip install -e '.[bench]'   # or: bash scripts/setup.sh",
-        "python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30     # Optuna, tuning tasks",
-        "python -m sixaxis_avoid.benchmark run --suite v1                  # local Ray, all cores",
+        "python -m sixaxis_avoid.benchmark tune --suite v1 --trials 10 --budget-scale 0.5",
+        "python -m sixaxis_avoid.benchmark run --suite v1 --budget-scale 0.5   # local Ray",
         "python -m sixaxis_avoid.benchmark run --suite v1 --address auto --seeds 20 "
-        "--budget-scale 4   # a cluster",
+        "--budget-scale 10   # a cluster",
         "python -m sixaxis_avoid.benchmark report --results results/bench/v1",
         "```",
         "",

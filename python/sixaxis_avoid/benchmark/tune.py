@@ -50,6 +50,8 @@ def cmd_tune(args: argparse.Namespace, argv: list[str]) -> int:
         if lr not in hpmod.TUNABLE:
             raise SystemExit(f"tune: {lr!r} has no search space ({', '.join(hpmod.TUNABLE)})")
     optuna.logging.set_verbosity(optuna.logging.WARNING)
+    if args.storage and args.storage.startswith("sqlite:///"):
+        Path(args.storage[len("sqlite:///") :]).parent.mkdir(parents=True, exist_ok=True)
     started = False if args.no_ray else runner.init_ray(args.address, args.num_cpus)
     try:
         for learner in learners:
