@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -48,9 +49,16 @@ def parse_args() -> argparse.Namespace:
 
 
 def machine() -> str:
-    from sixaxis_avoid.benchmark.runner import machine as describe
-
-    return f"{describe()}, Python {platform.python_version()}"
+    cpu = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    system = f"{platform.system()} {platform.machine()}"
+    return f"{cpu}, {os.cpu_count()} cores, {system}, Python {platform.python_version()}"
 
 
 def run_rust(quick: bool) -> list[dict]:

@@ -1,8 +1,10 @@
 """Atomic file writes: a temporary file in the same directory, flushed to disk, then renamed
-over the target, so a reader (or a restarted study) never sees half a file."""
+over the target, so a reader (or a restarted study) never sees half a file. The core's
+``write_atomic`` does it when the installed core has it; otherwise the same steps here."""
 
 from __future__ import annotations
 
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -31,9 +33,19 @@ def _replace(tmp: str, path: Path) -> None:
         os.close(fd)
 
 
+def _core_write() -> Any:
+    from sixaxis_avoid import _core
+
+    return getattr(_core, "write_atomic", None)
+
+
 def atomic_write_text(path: Path, text: str) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    write = _core_write()
+    if write is not None:
+        write(path, text)
+        return
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
@@ -49,6 +61,12 @@ def atomic_write_text(path: Path, text: str) -> None:
 def atomic_savefig(fig: Any, path: Path, dpi: int = 110) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    write = _core_write()
+    if write is not None:
+        buf = io.BytesIO()
+        fig.savefig(buf, dpi=dpi, format=path.suffix.lstrip(".") or "png")
+        write(path, buf.getvalue())
+        return
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
     os.close(fd)
     try:

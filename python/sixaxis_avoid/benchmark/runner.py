@@ -354,14 +354,13 @@ def run_study(
 
 
 def machine() -> str:
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    """The CPU, core count and OS (the core's description when it has one)."""
+    from sixaxis_avoid import _core
+
+    describe = getattr(_core, "machine", None)
+    if describe is not None:
+        return describe()
+    cpu = platform.processor() or platform.machine()
     return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}"
 
 
