@@ -1,0 +1,31 @@
+"""The learner benchmark: versioned task suites, a small Learner interface, runs on Ray,
+rliable statistics and a generated report (``python -m sixaxis_avoid.benchmark``).
+
+Entry points:
+
+- :class:`Learner`, :class:`RunContext` — write your own learner; name it ``module:Class``.
+- :func:`load_suite` — a suite (``quick``, ``v1``) or a suite file.
+- :func:`plan_runs`, :func:`run_study`, :func:`execute_run` — a study's runs, on Ray.
+- :func:`write_report` (in :mod:`sixaxis_avoid.benchmark.report`) — docs/BENCHMARKS.md.
+
+Needs the ``bench`` extra (``pip install sixaxis-avoid[bench]``: ray, optuna, rliable,
+stable-baselines3, sb3-contrib).
+"""
+
+from sixaxis_avoid.benchmark.learners import BUILTIN, Learner, RunContext, resolve
+from sixaxis_avoid.benchmark.runner import execute_run, load_runs, plan_runs, run_study
+from sixaxis_avoid.benchmark.tasks import Suite, Task, load_suite
+
+__all__ = [
+    "BUILTIN",
+    "Learner",
+    "RunContext",
+    "Suite",
+    "Task",
+    "execute_run",
+    "load_runs",
+    "load_suite",
+    "plan_runs",
+    "resolve",
+    "run_study",
+]

@@ -1,0 +1,210 @@
+"""``python -m sixaxis_avoid.benchmark {run,tune,report,list}``: the learner benchmark.
+
+python -m sixaxis_avoid.benchmark list                          # suites, learners, tasks
+python -m sixaxis_avoid.benchmark run --suite quick             # CI-sized, a minute or two
+python -m sixaxis_avoid.benchmark run --suite v1                # the reported study
+python -m sixaxis_avoid.benchmark run --suite v1 --address auto # on a Ray cluster
+python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30   # Optuna, tuning tasks only
+python -m sixaxis_avoid.benchmark report --results results/bench/v1
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from pathlib import Path
+from typing import Any
+
+from sixaxis_avoid.benchmark import learners as lmod
+from sixaxis_avoid.benchmark import runner
+from sixaxis_avoid.benchmark.tasks import SuiteError, available, load_suite
+
+DEFAULT_LEARNERS = "q_assist,q_plain,bfs,dqn,qrdqn,ppo,a2c"
+
+
+def command_line(argv: list[str]) -> str:
+    return "python -m sixaxis_avoid.benchmark " + " ".join(shlex.quote(a) for a in argv)
+
+
+def parse_seeds(text: str | None) -> list[int] | None:
+    if text is None:
+        return None
+    text = text.strip()
+    seeds = list(range(int(text))) if "," not in text else [int(s) for s in text.split(",")]
+    if not seeds or any(s < 0 for s in seeds):
+        raise SystemExit(f"--seeds: {text!r}: need at least one seed, all >= 0")
+    return seeds
+
+
+def split(text: str) -> list[str]:
+    return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def add_ray_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("Ray")
+    g.add_argument("--address", help="join this Ray cluster (e.g. auto, ray://host:10001)")
+    g.add_argument("--num-cpus", type=int, help="local Ray: cores to use (default: all)")
+    g.add_argument(
+        "--no-ray", action="store_true", help="run in this process, one run after another"
+    )
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    p = argparse.ArgumentParser(prog="python -m sixaxis_avoid.benchmark", description=__doc__)
+    sub = p.add_subparsers(dest="cmd", required=True)
+
+    r = sub.add_parser("run", help="run a study (skips runs already done)")
+    r.add_argument("--suite", default="v1", help=f"name ({', '.join(available())}) or path")
+    r.add_argument("--learners", default=DEFAULT_LEARNERS, help="comma list; module:Class too")
+    r.add_argument("--tasks", help="comma list of task ids (default: the suite's)")
+    r.add_argument("--seeds", help="a count N (0..N-1) or a comma list (default: the suite's)")
+    r.add_argument("--hyperparams", help="hyperparameter file (default: the suite's)")
+    r.add_argument(
+        "--budget-scale", type=float, default=1.0, help="multiply the deep learners' budgets"
+    )
+    r.add_argument("--out-dir", type=Path, help="default results/bench/SUITE")
+    add_ray_args(r)
+
+    t = sub.add_parser("tune", help="Optuna study per deep learner on the tuning tasks")
+    t.add_argument("--suite", default="v1")
+    t.add_argument("--learners", default=",".join(("dqn", "qrdqn", "ppo", "a2c")))
+    t.add_argument("--trials", type=int, default=10, help="trials per learner")
+    t.add_argument("--seeds", help="default: the suite's tuning seeds")
+    t.add_argument("--budget-scale", type=float, default=1.0)
+    t.add_argument("--parallel-trials", type=int, default=2, help="trials run at once")
+    t.add_argument("--sampler-seed", type=int, default=0)
+    t.add_argument("--storage", help="Optuna storage URL (e.g. sqlite:///tune.db) to resume")
+    t.add_argument("--out", type=Path, help="hyperparameter file (default: the suite's)")
+    t.add_argument("--log-dir", type=Path, help="trial results (default results/tune/SUITE)")
+    add_ray_args(t)
+
+    rep = sub.add_parser("report", help="docs/BENCHMARKS.md and figures from result files")
+    rep.add_argument("--results", type=Path, default=Path("results/bench/v1"))
+    rep.add_argument("--out", type=Path, default=Path("docs/BENCHMARKS.md"))
+    rep.add_argument("--figures-dir", type=Path, help="default: OUT's folder / figures/bench")
+    rep.add_argument("--reps", type=int, default=2000, help="bootstrap replications")
+
+    ls = sub.add_parser("list", help="suites, learners and a suite's tasks")
+    ls.add_argument("--suite", default="v1")
+    ls.add_argument("--json", action="store_true")
+    args = p.parse_args(argv)
+    for name in ("budget_scale",):
+        if getattr(args, name, 1.0) <= 0:
+            p.error(f"--{name.replace('_', '-')} must be > 0")
+    for name in ("trials", "parallel_trials", "num_cpus", "reps"):
+        v = getattr(args, name, None)
+        if v is not None and v < 1:
+            p.error(f"--{name.replace('_', '-')} must be >= 1")
+    return args
+
+
+def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
+    suite = load_suite(args.suite)
+    tasks = None if args.tasks is None else [suite.task(t) for t in split(args.tasks)]
+    learners = split(args.learners)
+    for name in learners:
+        lmod.resolve(name)
+    specs = runner.plan_runs(
+        suite,
+        learners,
+        seeds=parse_seeds(args.seeds),
+        tasks=tasks,
+        hyperparams=args.hyperparams or suite.raw.get("hyperparams", "v1"),
+        budget_scale=args.budget_scale,
+    )
+    out = args.out_dir or Path("results") / "bench" / suite.name
+    print(f"{len(specs)} runs ({len(learners)} learners) -> {out}", file=sys.stderr)
+    res = runner.run_study(
+        specs,
+        out,
+        address=args.address,
+        num_cpus=args.num_cpus,
+        use_ray=not args.no_ray,
+        progress=not args.no_progress,
+    )
+    manifest_path = out / "study.json"
+    previous: dict[str, Any] = {}
+    if manifest_path.exists():
+        previous = json.loads(manifest_path.read_text())
+    runner.write_manifest(
+        out,
+        {
+            "command": command_line(argv),
+            "suite": suite.raw,
+            "learners": learners,
+            "tasks": [t.id for t in (tasks or suite.tasks)],
+            "seeds": sorted({s["seed"] for s in specs}),
+            "runs": res["runs"],
+            "ran_now": res["ran"],
+            "skipped_now": res["skipped"],
+            "wall_time_s_now": res["wall_time_s"],
+            "wall_time_s_total": previous.get("wall_time_s_total", 0.0) + res["wall_time_s"],
+            "ray": "in-process" if args.no_ray else (args.address or "local"),
+            "failures": res["failures"],
+        },
+    )
+    print(
+        f"{res['ran']} ran, {res['skipped']} already done, {len(res['failures'])} failed, "
+        f"{res['wall_time_s']:.1f} s",
+        file=sys.stderr,
+    )
+    for key, err in res["failures"]:
+        print(f"FAILED {key}: {err}", file=sys.stderr)
+    return 1 if res["failures"] else 0
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    suite = load_suite(args.suite)
+    data = {
+        "suites": available(),
+        "learners": {k: v.title for k, v in lmod.BUILTIN.items()},
+        "suite": suite.name,
+        "seeds": suite.seeds,
+        "budgets": suite.budgets,
+        "tasks": [t.describe() for t in suite.tasks],
+        "tuning_tasks": [t.describe() for t in suite.tuning_tasks],
+    }
+    if args.json:
+        print(json.dumps(data, indent=1))
+        return 0
+    print(f"suites: {', '.join(data['suites'])}")
+    print("learners: " + "; ".join(f"{k} ({v})" for k, v in data["learners"].items()))
+    print(f"suite {suite.name} v{suite.version}: seeds {suite.seeds}, budgets {suite.budgets}")
+    for label, rows in (("task", data["tasks"]), ("tuning task", data["tuning_tasks"])):
+        for d in rows:
+            print(
+                f"  {label} {d['id']:<22} {d['group']:<18} grid {'x'.join(map(str, d['grid']))}"
+                f", {d['obstacles']} obstacles, optimum {d['optimal_lengths']} moves"
+            )
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parse_args(argv)
+    try:
+        if args.cmd == "run":
+            return cmd_run(args, argv)
+        if args.cmd == "list":
+            return cmd_list(args)
+        if args.cmd == "tune":
+            from sixaxis_avoid.benchmark.tune import cmd_tune
+
+            return cmd_tune(args, argv)
+        if args.cmd == "report":
+            from sixaxis_avoid.benchmark.report import write_report
+
+            write_report(args.results, args.out, args.figures_dir, reps=args.reps)
+            print(f"wrote {args.out}", file=sys.stderr)
+            return 0
+    except (SuiteError, lmod.LearnerError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,590 @@
+"""The Learner interface and the built-in learners.
+
+A learner trains on a task with a seed and an env-step budget, and gives its greedy path::
+
+    from sixaxis_avoid.benchmark import Learner, RunContext
+
+    class MyLearner(Learner):
+        family = "deep"                      # re-plan cap and budget of the neural learners
+
+        def learn(self, ctx: RunContext) -> None:
+            env = ctx.make_env()             # a Gymnasium env that counts steps for the curve
+            ...                              # train for ctx.budget env steps, seeded by ctx.seed
+
+        def greedy_path(self, world) -> list[tuple[int, int, int]] | None:
+            ...                              # the policy's path from world.start to world.target
+
+and runs as ``python -m sixaxis_avoid.benchmark run --learners mypkg.mod:MyLearner``.
+
+The harness scores the greedy path at checkpoints of env steps (the learning curve), with the
+training time (wall and CPU, evaluation excluded) at each; ``ctx.make_env`` does it while the
+learner trains. Learners that do not step a Python env (the native Q-learner, BFS) call
+``ctx.checkpoint`` themselves.
+"""
+
+from __future__ import annotations
+
+import abc
+import importlib
+import time
+from typing import Any, Callable, ClassVar
+
+import gymnasium as gym
+import numpy as np
+
+Cell = tuple[int, int, int]
+
+
+def path_cells(path: Any) -> list[list[int]] | None:
+    return None if path is None else [[int(v) for v in c] for c in path]
+
+
+def spl(path: Any, optimal: int) -> float:
+    """Success weighted by path length: optimal / max(length, optimal) if the path reaches
+    the target, else 0 (1 = optimal)."""
+    if path is None:
+        return 0.0
+    moves = len(path) - 1
+    return float(optimal) / float(max(moves, optimal)) if moves > 0 else 1.0
+
+
+class Clock:
+    """Training time, wall and CPU, with evaluation paused out."""
+
+    def __init__(self) -> None:
+        self.wall0, self.cpu0 = time.perf_counter(), time.process_time()
+        self.paused_wall = self.paused_cpu = 0.0
+
+    def now(self) -> tuple[float, float]:
+        return (
+            time.perf_counter() - self.wall0 - self.paused_wall,
+            time.process_time() - self.cpu0 - self.paused_cpu,
+        )
+
+    def pause(self) -> tuple[float, float]:
+        return time.perf_counter(), time.process_time()
+
+    def resume(self, mark: tuple[float, float]) -> None:
+        self.paused_wall += time.perf_counter() - mark[0]
+        self.paused_cpu += time.process_time() - mark[1]
+
+
+class RunContext:
+    """What a learner gets for one run: the task, seed, budget and hyperparameters, envs that
+    count steps, and the learning curve being recorded."""
+
+    def __init__(
+        self,
+        task: Any,
+        seed: int,
+        budget: int,
+        hyperparams: dict[str, Any],
+        checkpoints: list[int],
+        learner: Learner,
+        world: Any = None,
+    ) -> None:
+        self.task = task
+        self.seed = int(seed)
+        self.budget = int(budget)
+        self.hyperparams = dict(hyperparams)
+        self.checkpoints = sorted(int(c) for c in checkpoints)
+        self.learner = learner
+        #: The world trained on (the task's scenario; a re-plan round's world in Algorithm 2).
+        self.world = task.scenario if world is None else world
+        self.env_steps = 0
+        self.episodes = 0
+        self.points: list[dict[str, Any]] = []
+        self.first_success: dict[str, Any] | None = None
+        self.clock = Clock()
+        self._next = 0
+
+    # -- for learners that step Python envs ------------------------------------------------
+    def make_env(self, **kwargs: Any) -> gym.Env:
+        """The task's training env (``sixaxis_avoid.make``), counting steps, episodes and
+        the first success, and scoring the greedy path when a checkpoint is passed. Goal tasks
+        get ``obs_type="goal"`` and ``random_target=True`` unless given."""
+        import sixaxis_avoid as sa
+
+        if self.task.is_goal:
+            kwargs.setdefault("obs_type", "goal")
+            kwargs.setdefault("random_target", True)
+        return CountingEnv(sa.make(scenario=self.world, **kwargs), self)
+
+    def on_step(self, reached: bool, done: bool) -> None:
+        self.env_steps += 1
+        if reached and self.first_success is None:
+            wall, cpu = self.clock.now()
+            self.first_success = {
+                "env_steps": self.env_steps,
+                "episode": self.episodes,
+                "wall_time_s": wall,
+                "cpu_time_s": cpu,
+            }
+        if done:
+            self.episodes += 1
+        while self._next < len(self.checkpoints) and self.env_steps >= self.checkpoints[self._next]:
+            self._next += 1
+            self.checkpoint(self.env_steps)
+
+    # -- for every learner -----------------------------------------------------------------
+    def checkpoint(
+        self,
+        env_steps: int,
+        paths: list[Any] | None = None,
+        wall_time_s: float | None = None,
+        cpu_time_s: float | None = None,
+    ) -> None:
+        """Record a curve point: the greedy path per evaluation target (``paths``; default:
+        ask the learner) after ``env_steps`` env steps of training, which took
+        ``wall_time_s``/``cpu_time_s`` (default: the clock's training time)."""
+        wall, cpu = self.clock.now()
+        wall = wall if wall_time_s is None else wall_time_s
+        cpu = cpu if cpu_time_s is None else cpu_time_s
+        mark = self.clock.pause()
+        if paths is None:
+            paths = [self.learner.greedy_path(self.task.world(t)) for t in self.targets()]
+        self.clock.resume(mark)
+        opt = self.task.optimal_lengths if self.world is self.task.scenario else None
+        scores = (
+            [spl(p, o) for p, o in zip(paths, opt)]
+            if opt
+            else [float(p is not None) for p in paths]
+        )
+        self.points.append(
+            {
+                "env_steps": int(env_steps),
+                "score": float(np.mean(scores)),
+                "success": float(np.mean([p is not None for p in paths])),
+                "wall_time_s": float(wall),
+                "cpu_time_s": float(cpu),
+                "paths": [path_cells(p) for p in paths],
+            }
+        )
+
+    def targets(self) -> list[Cell]:
+        if self.world is self.task.scenario:
+            return self.task.eval_targets
+        return [tuple(self.world.target)]
+
+    def finish(self) -> None:
+        """After training: a final point at the last env step, unless one is there."""
+        if not self.points or self.points[-1]["env_steps"] != self.env_steps:
+            self.checkpoint(self.env_steps)
+
+
+class CountingEnv(gym.Wrapper):
+    """Counts env steps for the :class:`RunContext` (its curve, first success, budget)."""
+
+    def __init__(self, env: gym.Env, ctx: RunContext) -> None:
+        super().__init__(env)
+        self._ctx = ctx
+
+    def step(self, action: Any):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self._ctx.on_step(bool(info.get("is_success", False)), terminated or truncated)
+        return obs, reward, terminated, truncated, info
+
+    def compute_reward(self, achieved_goal: Any, desired_goal: Any, info: Any) -> Any:
+        return self.env.unwrapped.compute_reward(achieved_goal, desired_goal, info)
+
+
+class Learner(abc.ABC):
+    """One learner; a fresh instance per run, built with the run's hyperparameters."""
+
+    #: "native" (tabular, the paper's), "deep" (neural) or "reference" (BFS): which budget
+    #: and Algorithm 2 re-plan cap of the suite apply.
+    family: ClassVar[str] = "deep"
+    #: Hyperparameters used when the hyperparameter file has none for this learner.
+    defaults: ClassVar[dict[str, Any]] = {}
+    #: One line for the report.
+    title: ClassVar[str] = ""
+
+    def __init__(self, hyperparams: dict[str, Any] | None = None) -> None:
+        self.hyperparams = {**self.defaults, **(hyperparams or {})}
+
+    @abc.abstractmethod
+    def learn(self, ctx: RunContext) -> None:
+        """Train on ``ctx.world`` with ``ctx.seed`` for about ``ctx.budget`` env steps."""
+
+    @abc.abstractmethod
+    def greedy_path(self, world: Any) -> list[Cell] | None:
+        """The greedy path from ``world.start`` to ``world.target`` (None: not reached)."""
+
+    def algorithm2_learner(self, ctx: RunContext) -> Any:
+        """What Algorithm 2 (``sixaxis_avoid.plan(learner=...)``) learns each round's path
+        with. Default: round 0 reuses this run's path; a re-plan trains a fresh learner of this
+        class on the round's world with the same seed, budget and hyperparameters."""
+        return RetrainPerRound(self, ctx)
+
+    def algorithm2_kwargs(self) -> dict[str, Any]:
+        """Further keywords of ``sixaxis_avoid.plan`` for this learner."""
+        return {}
+
+
+class RetrainPerRound:
+    """``learn_path(scenario, seed)`` for the core's Algorithm 2 loop (see
+    :meth:`Learner.algorithm2_learner`)."""
+
+    def __init__(self, learner: Learner, ctx: RunContext) -> None:
+        self.learner, self.ctx = learner, ctx
+
+    def learn_path(self, scenario: Any, seed: int) -> dict[str, Any]:
+        base = self.ctx.task.scenario
+        if same_world(scenario, base):  # round 0: this run's own path
+            path = self.ctx.points[-1]["paths"][0]
+            steps = self.ctx.env_steps
+        else:
+            fresh = type(self.learner)(self.learner.hyperparams)
+            ctx = RunContext(
+                self.ctx.task, seed, self.ctx.budget, fresh.hyperparams, [], fresh, scenario
+            )
+            fresh.learn(ctx)
+            path, steps = fresh.greedy_path(scenario), ctx.env_steps
+        cells = None if path is None else [tuple(int(v) for v in c) for c in path]
+        return {"path": cells, "total_steps": int(steps)}
+
+
+def same_world(a: Any, b: Any) -> bool:
+    """Same start, target and obstacle set (a re-plan round adds obstacles)."""
+    return (
+        tuple(a.start) == tuple(b.start)
+        and tuple(a.target) == tuple(b.target)
+        and {tuple(c) for c in a.obstacles} == {tuple(c) for c in b.obstacles}
+    )
+
+
+# ------------------------------------------------------------------------------------------
+# Native tabular Q-learning (the paper's) and the BFS optimum
+
+
+class NativeQ(Learner):
+    """The core's tabular Q-learner (``sixaxis_avoid.train``), the paper's eqs. 5-8."""
+
+    family = "native"
+    assist: ClassVar[bool] = True
+
+    def learn(self, ctx: RunContext) -> None:
+        cap = int(self.hyperparams.get("episodes") or ctx.world.learning["episodes"])
+        step_cap = self.hyperparams.get("max_env_steps")
+        targets = ctx.targets()
+        runs = [
+            _NativeRun(self._world(ctx, t), ctx.seed, self.assist, cap, step_cap) for t in targets
+        ]
+        self._paths = {t: r.full.path for t, r in zip(targets, runs)}
+        self.converged_episode = runs[0].full.converged_episode
+        self.episodes_run = runs[0].episodes
+        # Goal tasks: one run per target, one after the other, cost summed.
+        offsets = np.concatenate([[0], np.cumsum([int(r.cum[-1]) for r in runs])])
+        first = next((i for i, r in enumerate(runs) if r.reached.any()), None)
+        if first is not None:
+            r = runs[first]
+            e = int(np.argmax(r.reached))
+            res, cpu = r.prefix(e + 1)
+            ctx.first_success = {
+                "env_steps": int(offsets[first] + r.cum[e]),
+                "episode": sum(x.episodes for x in runs[:first]) + e,
+                "wall_time_s": sum(x.full.wall_time_s for x in runs[:first]) + res.wall_time_s,
+                "cpu_time_s": sum(x.cpu for x in runs[:first]) + cpu,
+            }
+        total = int(offsets[-1])
+        # The suite's checkpoints are sized for the deep learners' budget; add as many on a
+        # geometric grid up to this run's own length.
+        own = np.geomspace(max(1, total // 100), total, max(len(ctx.checkpoints), 2))
+        grid = sorted({*ctx.checkpoints, *own.round().astype(np.int64).tolist()})
+        done_at: set[int] = set()
+        for c in [*[c for c in grid if c < total], total]:
+            i = min(int(np.searchsorted(offsets, c, side="right")) - 1, len(runs) - 1)
+            r = runs[i]
+            k = int(np.searchsorted(r.cum, c - offsets[i], side="right"))
+            steps_at = int(offsets[i] + (r.cum[k - 1] if k else 0))
+            if steps_at in done_at:
+                continue
+            done_at.add(steps_at)
+            res, cpu = r.prefix(k) if k else (None, 0.0)
+            paths = [x.full.path for x in runs[:i]] + [None if res is None else res.path]
+            paths += [None] * (len(runs) - len(paths))
+            ctx.checkpoint(
+                steps_at,
+                paths,
+                wall_time_s=sum(x.full.wall_time_s for x in runs[:i])
+                + (0.0 if res is None else res.wall_time_s),
+                cpu_time_s=sum(x.cpu for x in runs[:i]) + cpu,
+            )
+        ctx.env_steps = total
+        ctx.episodes = sum(r.episodes for r in runs)
+
+    @staticmethod
+    def _world(ctx: RunContext, target: Cell) -> Any:
+        return ctx.task.world(target) if ctx.world is ctx.task.scenario else ctx.world
+
+    def greedy_path(self, world: Any) -> list[Cell] | None:
+        return self._paths.get(tuple(world.target))
+
+    def algorithm2_learner(self, ctx: RunContext) -> str:
+        return "qlearning"
+
+    def algorithm2_kwargs(self) -> dict[str, Any]:
+        return {"episodes": self.episodes_run, "assist": self.assist}
+
+
+class _NativeRun:
+    """One ``sixaxis_avoid.train`` run and its episode prefixes. The epsilon schedule depends
+    on the episode index only, so training for fewer episodes is the same run's prefix
+    (checked): the greedy path after k episodes is that of a k-episode run."""
+
+    def __init__(
+        self, world: Any, seed: int, assist: bool, episodes: int, step_cap: int | None
+    ) -> None:
+        self.world, self.seed, self.assist = world, seed, assist
+        self._prefixes: dict[int, tuple[Any, float]] = {}
+        full, cpu = self._train(episodes)
+        self.steps = np.asarray(full.steps_per_episode, dtype=np.int64)
+        cum = np.cumsum(self.steps)
+        if step_cap is not None and cum[-1] > int(step_cap):
+            episodes = max(1, int(np.searchsorted(cum, int(step_cap), side="right")))
+            full, cpu = self.prefix(episodes)
+        self.episodes = episodes
+        self.cum = cum[:episodes]
+        self.reached = np.asarray(full.reached_per_episode, dtype=bool)[:episodes]
+        self.full, self.cpu = full, cpu
+        self._prefixes[episodes] = (full, cpu)
+
+    def _train(self, episodes: int) -> tuple[Any, float]:
+        import sixaxis_avoid as sa
+
+        c0 = time.process_time()
+        r = sa.train(self.world, seed=self.seed, assist=self.assist, episodes=episodes)
+        return r, time.process_time() - c0
+
+    def prefix(self, k: int) -> tuple[Any, float]:
+        if k not in self._prefixes:
+            r, cpu = self._train(k)
+            if not np.array_equal(np.asarray(r.steps_per_episode), self.steps[:k]):
+                raise RuntimeError(f"{k} episodes of sixaxis_avoid.train are not a prefix")
+            self._prefixes[k] = (r, cpu)
+        return self._prefixes[k]
+
+
+class QAssisted(NativeQ):
+    title = "tabular Q-learning, assisted (the paper's eqs. 5, 9, 10)"
+    assist = True
+
+
+class QPlain(NativeQ):
+    title = "tabular Q-learning, plain (eq. 5 alone)"
+    assist = False
+
+
+class BFS(Learner):
+    """The breadth-first shortest path: the optimum, no learning (0 env steps)."""
+
+    family = "reference"
+    title = "breadth-first shortest path (the optimum; no learning)"
+
+    def learn(self, ctx: RunContext) -> None:
+        ctx.checkpoint(0)
+
+    def greedy_path(self, world: Any) -> list[Cell] | None:
+        import sixaxis_avoid as sa
+
+        return sa.shortest_path(world)
+
+    def algorithm2_learner(self, ctx: RunContext) -> str:
+        return "bfs"
+
+
+# ------------------------------------------------------------------------------------------
+# Stable-Baselines3 and sb3-contrib
+
+#: Hyperparameters that configure the env rather than the algorithm.
+ENV_KEYS = ("reward_scale", "assist", "max_episode_steps", "n_envs")
+
+#: Env settings of every deep learner's defaults: the paper's assisted rewards scaled to
+#: O(1) (the paper's are tens of thousands), episodes capped at 200 steps.
+ENV_DEFAULTS: dict[str, Any] = {"reward_scale": 1e-4, "assist": True, "max_episode_steps": 200}
+
+#: DQN defaults (until tuned): rl-baselines3-zoo hyperparams/dqn.yml, MountainCar-v0 (a
+#: sparse-reward, discrete-action goal-reaching task; commit ce95481b), SB3 defaults otherwise.
+DQN_DEFAULTS: dict[str, Any] = {
+    **ENV_DEFAULTS,
+    "learning_rate": 4e-3,
+    "batch_size": 128,
+    "buffer_size": 10_000,
+    "learning_starts": 1_000,
+    "gamma": 0.98,
+    "target_update_interval": 600,
+    "train_freq": 16,
+    "gradient_steps": 8,
+    "exploration_fraction": 0.2,
+    "exploration_final_eps": 0.07,
+    "net_arch": [256, 256],
+}
+#: QR-DQN defaults (until tuned): DQN's, with 50 quantiles.
+QRDQN_DEFAULTS: dict[str, Any] = {**DQN_DEFAULTS, "n_quantiles": 50}
+#: PPO defaults (until tuned): SB3's, with 8 envs, n_steps 256 and ent_coef 0.01.
+PPO_DEFAULTS: dict[str, Any] = {**ENV_DEFAULTS, "n_envs": 8, "n_steps": 256, "ent_coef": 0.01}
+#: A2C defaults (until tuned): SB3's, with 8 envs and ent_coef 0.01.
+A2C_DEFAULTS: dict[str, Any] = {**ENV_DEFAULTS, "n_envs": 8, "ent_coef": 0.01}
+
+
+def greedy_rollout(model: Any, env: gym.Env, cap: int) -> list[Cell] | None:
+    """The deterministic policy's path from the start: the cells visited until the target
+    (bumps into obstacles leave the terminal in place and are not moves); None on a loop (a
+    repeated (cell, collided) pair: the observation repeats, so does the action) or at the
+    step cap."""
+    obs, info = env.reset(seed=0)
+    cell = tuple(info["cell"])
+    path, seen = [cell], {(cell, False)}
+    for _ in range(cap):
+        action, _ = model.predict(obs, deterministic=True)
+        obs, _, terminated, _, info = env.step(int(action))
+        cell, collided = tuple(info["cell"]), bool(info["collided"])
+        if not collided:
+            path.append(cell)
+        if terminated:
+            return path
+        if (cell, collided) in seen:
+            return None
+        seen.add((cell, collided))
+    return None
+
+
+class SB3Learner(Learner):
+    """A Stable-Baselines3-style algorithm on ``SixAxisAvoid-v0`` (vector observations; goal
+    observations on goal tasks, with hindsight experience replay for off-policy ones)."""
+
+    family = "deep"
+    off_policy: ClassVar[bool] = False
+    #: ``module:Class`` of the algorithm.
+    algorithm_path: ClassVar[str] = ""
+
+    def algorithm(self) -> Any:
+        module, _, name = self.algorithm_path.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+    def learn(self, ctx: RunContext) -> None:
+        import torch
+        from stable_baselines3.common.logger import Logger
+        from stable_baselines3.common.vec_env import DummyVecEnv
+
+        torch.set_num_threads(1)
+        hp = dict(self.hyperparams)
+        env_kw = {k: hp.pop(k) for k in ENV_KEYS if k in hp}
+        n_envs = int(env_kw.pop("n_envs", 1))
+        self._env_kw = {k: env_kw[k] for k in ("reward_scale", "assist") if k in env_kw}
+        self._goal = ctx.task.is_goal
+        vec = DummyVecEnv([lambda: ctx.make_env(**env_kw)] * n_envs)
+        policy_kwargs = {k: hp.pop(k) for k in ("net_arch", "n_quantiles") if k in hp}
+        if self._goal and self.off_policy:
+            from stable_baselines3 import HerReplayBuffer
+
+            # HER cannot sample before an episode has ended: learning starts after one.
+            cap = int(env_kw.get("max_episode_steps", ctx.world.max_steps_per_episode))
+            hp["learning_starts"] = max(int(hp.get("learning_starts", 100)), cap)
+            hp["replay_buffer_class"] = HerReplayBuffer
+            hp["replay_buffer_kwargs"] = {
+                "n_sampled_goal": int(hp.pop("her_n_sampled_goal", 4)),
+                "goal_selection_strategy": "future",
+                "copy_info_dict": True,
+            }
+        else:
+            hp.pop("her_n_sampled_goal", None)
+        policy = "MultiInputPolicy" if self._goal else "MlpPolicy"
+        self.model = self.algorithm()(
+            policy,
+            vec,
+            policy_kwargs=policy_kwargs or None,
+            seed=ctx.seed,
+            device="cpu",
+            verbose=0,
+            **hp,
+        )
+        self.model.set_logger(Logger(None, []))  # no log files
+        self._eval_envs: dict[Cell, gym.Env] = {}
+        self.model.learn(total_timesteps=ctx.budget)
+        vec.close()
+
+    def greedy_path(self, world: Any) -> list[Cell] | None:
+        import sixaxis_avoid as sa
+
+        key = (tuple(world.target), len(world.obstacles))
+        env = self._eval_envs.get(key)
+        if env is None:
+            obs_type = "goal" if self._goal else "vector"
+            env = sa.make(scenario=world, obs_type=obs_type, **self._env_kw).unwrapped
+            self._eval_envs[key] = env
+        return greedy_rollout(self.model, env, world.max_steps_per_episode)
+
+
+class DQN(SB3Learner):
+    title = "Stable-Baselines3 DQN (HER on goal tasks)"
+    algorithm_path = "stable_baselines3:DQN"
+    off_policy = True
+    defaults = DQN_DEFAULTS
+
+
+class QRDQN(SB3Learner):
+    title = "sb3-contrib QR-DQN (HER on goal tasks)"
+    algorithm_path = "sb3_contrib:QRDQN"
+    off_policy = True
+    # DQN's values, and 50 quantiles (sb3-contrib's 200 make the pairwise quantile loss,
+    # batch x 200 x 200, cost most of a run's CPU time).
+    defaults = QRDQN_DEFAULTS
+
+
+class PPO(SB3Learner):
+    title = "Stable-Baselines3 PPO"
+    algorithm_path = "stable_baselines3:PPO"
+    defaults = PPO_DEFAULTS
+
+
+class A2C(SB3Learner):
+    title = "Stable-Baselines3 A2C"
+    algorithm_path = "stable_baselines3:A2C"
+    defaults = A2C_DEFAULTS
+
+
+BUILTIN: dict[str, type[Learner]] = {
+    "q_assist": QAssisted,
+    "q_plain": QPlain,
+    "bfs": BFS,
+    "dqn": DQN,
+    "qrdqn": QRDQN,
+    "ppo": PPO,
+    "a2c": A2C,
+}
+
+
+class LearnerError(ValueError):
+    """A learner name that is neither built in nor an importable ``module:Class``."""
+
+
+def resolve(name: str) -> type[Learner]:
+    """A built-in learner by name, or a user's as ``module:Class``."""
+    if name in BUILTIN:
+        return BUILTIN[name]
+    if ":" not in name:
+        raise LearnerError(
+            f"learner {name!r}: not built in ({', '.join(BUILTIN)}) and not module:Class"
+        )
+    module, _, cls = name.partition(":")
+    try:
+        obj = getattr(importlib.import_module(module), cls)
+    except (ImportError, AttributeError) as e:
+        raise LearnerError(
+            f"learner {name!r}: cannot import {cls} from {module} ({e}); it must be importable "
+            "on every Ray node (install it or put it on PYTHONPATH)"
+        ) from e
+    if not (isinstance(obj, type) and callable(getattr(obj, "learn", None))):
+        raise LearnerError(f"learner {name!r}: {obj!r} is not a class with learn/greedy_path")
+    for attr in ("learn", "greedy_path"):
+        if not callable(getattr(obj, attr, None)):
+            raise LearnerError(f"learner {name!r}: {cls} has no method {attr}()")
+    return obj
+
+
+def family_of(cls: type[Any]) -> str:
+    return str(getattr(cls, "family", "deep"))
+
+
+Factory = Callable[[dict[str, Any]], Learner]

@@ -1,0 +1,475 @@
+"""docs/BENCHMARKS.md and its figures, regenerated from a study's result files.
+
+``python -m sixaxis_avoid.benchmark report --results results/bench/v1`` reads
+``study.json`` and ``runs/*.json`` and writes the Markdown report and three figures: IQM
+learning curves with 95% bands, performance profiles with bands, and IQM / mean / optimality
+gap with 95% confidence intervals.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sixaxis_avoid.benchmark import hyperparams as hpmod
+from sixaxis_avoid.benchmark import stats
+from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
+from sixaxis_avoid.benchmark.learners import BUILTIN
+from sixaxis_avoid.benchmark.runner import load_runs, task_of
+
+COLORS = {
+    "q_assist": "tab:blue",
+    "q_plain": "tab:orange",
+    "bfs": "black",
+    "dqn": "tab:green",
+    "qrdqn": "tab:olive",
+    "ppo": "tab:red",
+    "a2c": "tab:purple",
+}
+
+
+def fmt(v: Any, spec: str = ".2f") -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "—"
+    return format(v, spec) if isinstance(v, float) else str(v)
+
+
+def fmt_steps(v: Any) -> str:
+    if v is None:
+        return "—"
+    v = float(v)
+    if v >= 1e6:
+        return f"{v / 1e6:.2f}M"
+    if v >= 1e4:
+        return f"{v / 1e3:.0f}k"
+    return f"{v:.0f}"
+
+
+def fmt_time(v: Any) -> str:
+    if v is None:
+        return "—"
+    v = float(v)
+    if v < 1e-3:
+        return f"{v * 1e6:.0f} µs"
+    if v < 1:
+        return f"{v * 1e3:.1f} ms"
+    return f"{v:.1f} s"
+
+
+def ci(point: float, lo_hi: list[float]) -> str:
+    return f"{point:.3f} [{lo_hi[0]:.3f}, {lo_hi[1]:.3f}]"
+
+
+def title(learner: str) -> str:
+    cls = BUILTIN.get(learner)
+    return cls.title if cls else f"user learner `{learner}`"
+
+
+def analyse(results: Path, reps: int = stats.REPS) -> dict[str, Any]:
+    """Everything the report shows, computed from the result files."""
+    manifest = json.loads((Path(results) / "study.json").read_text())
+    runs = load_runs(results)
+    learners = [lr for lr in manifest["learners"] if any(r["spec"]["learner"] == lr for r in runs)]
+    tasks = [t for t in manifest["tasks"] if any(r["spec"]["task"]["id"] == t for r in runs)]
+    runs = [
+        r for r in runs if r["spec"]["learner"] in learners and r["spec"]["task"]["id"] in tasks
+    ]
+    scores, seeds = stats.score_matrices(runs, learners, tasks)
+    if not seeds:
+        raise ValueError(f"{results}: no seed has a result for every (learner, task)")
+    reference = tuple(
+        lr
+        for lr in learners
+        if any(r["spec"]["learner"] == lr and r["spec"]["family"] == "reference" for r in runs)
+    )
+    agg = stats.aggregates(scores, reps=reps, poi_exclude=reference)
+    hi = max(max(p["env_steps"] for p in r["result"]["curve"]) for r in runs)
+    grid = np.unique(np.geomspace(1, max(hi, 2), 40).round().astype(np.int64))
+    curves = stats.iqm_curves(runs, learners, tasks, seeds, grid, reps=max(reps // 4, 100))
+    task_objs = {
+        t: task_of(next(r["spec"] for r in runs if r["spec"]["task"]["id"] == t)) for t in tasks
+    }
+    groups: dict[str, list[str]] = {}
+    for t in tasks:
+        groups.setdefault(task_objs[t].group, []).append(t)
+    mine = {lr: [r for r in runs if r["spec"]["learner"] == lr] for lr in learners}
+    per = {lr: stats.per_learner(mine[lr]) for lr in learners}
+    per_group = {
+        g: {
+            lr: stats.per_learner([r for r in mine[lr] if r["spec"]["task"]["id"] in ts])
+            for lr in learners
+        }
+        for g, ts in groups.items()
+    }
+    per_task = {
+        t: {
+            lr: stats.per_learner([r for r in mine[lr] if r["spec"]["task"]["id"] == t])
+            for lr in learners
+        }
+        for t in tasks
+    }
+    return {
+        "manifest": manifest,
+        "runs": runs,
+        "learners": learners,
+        "tasks": tasks,
+        "task_objs": task_objs,
+        "seeds": seeds,
+        "agg": agg,
+        "grid": grid.tolist(),
+        "curves": curves,
+        "groups": groups,
+        "per": per,
+        "per_group": per_group,
+        "per_task": per_task,
+        "reps": reps,
+    }
+
+
+# ------------------------------------------------------------------------------------------
+# Figures
+
+
+def figures(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out: dict[str, Path] = {}
+    learners = a["learners"]
+    n_runs = len(a["seeds"]) * len(a["tasks"])
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    grid = np.asarray(a["grid"])
+    for lr in learners:
+        c = a["curves"][lr]
+        color = COLORS.get(lr)
+        keep = grid <= max(c["max_env_steps"], 1)
+        ax.plot(grid[keep], np.asarray(c["iqm"])[keep], color=color, label=lr)
+        ax.fill_between(
+            grid[keep],
+            np.asarray(c["lo"])[keep],
+            np.asarray(c["hi"])[keep],
+            color=color,
+            alpha=0.15,
+            linewidth=0,
+        )
+    ax.set_xscale("log")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("IQM score (SPL of the greedy path)")
+    ax.set_title(f"Learning curves: IQM over {n_runs} runs per learner, 95% CI band")
+    ax.legend(fontsize=8, loc="upper left")
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    out["curves"] = out_dir / "bench_curves.png"
+    atomic_savefig(fig, out["curves"])
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    taus = np.asarray(a["agg"]["taus"])
+    for lr in learners:
+        s = a["agg"]["learners"][lr]
+        color = COLORS.get(lr)
+        ax.plot(taus, s["profile"], color=color, label=lr)
+        ax.fill_between(taus, *s["profile_ci"], color=color, alpha=0.15, linewidth=0)
+    ax.set_xlabel(r"score threshold $\tau$")
+    ax.set_ylabel(r"fraction of runs with score > $\tau$")
+    ax.set_title("Performance profiles (95% CI band)")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    out["profiles"] = out_dir / "bench_profiles.png"
+    atomic_savefig(fig, out["profiles"])
+    plt.close(fig)
+
+    fig, axes = plt.subplots(1, 3, figsize=(12, 0.5 * len(learners) + 1.5), sharey=True)
+    ys = np.arange(len(learners))
+    for ax, key, label in zip(
+        axes, ("iqm", "mean", "optimality_gap"), ("IQM", "mean", "optimality gap")
+    ):
+        for y, lr in zip(ys, learners):
+            s = a["agg"]["learners"][lr]
+            lo, hi = s[f"{key}_ci"]
+            ax.barh(y, hi - lo, left=lo, height=0.6, color=COLORS.get(lr, "gray"), alpha=0.6)
+            ax.plot([s[key]] * 2, [y - 0.3, y + 0.3], color="black", linewidth=1.5)
+        ax.set_xlabel(label)
+        ax.set_xlim(-0.02, 1.02)
+        ax.grid(True, axis="x", alpha=0.3)
+    axes[0].set_yticks(ys)
+    axes[0].set_yticklabels(learners)
+    fig.suptitle("Final score (SPL) with 95% stratified-bootstrap CIs")
+    fig.tight_layout()
+    out["iqm"] = out_dir / "bench_iqm.png"
+    atomic_savefig(fig, out["iqm"])
+    plt.close(fig)
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# Markdown
+
+
+def hyperparam_section(a: dict[str, Any]) -> list[str]:
+    specs = {}
+    for r in a["runs"]:
+        specs.setdefault(r["spec"]["learner"], r["spec"])
+    deep = [lr for lr in a["learners"] if specs[lr]["family"] == "deep"]
+    if not deep:
+        return []
+    suite_hp = a["manifest"]["suite"].get("hyperparams", "v1")
+    data = hpmod.load(suite_hp)
+    pending = [lr for lr in deep if specs[lr]["hyperparams_status"] != "tuned"]
+    out = ["## Hyperparameters of the deep learners", ""]
+    if pending:
+        out += [
+            f"**Not tuned: {', '.join(pending)} ran with defaults, pending a tuning run** "
+            "(`python -m sixaxis_avoid.benchmark tune`; see *How to run*). Their results "
+            "are those of untuned baselines and say little about what the algorithm can do.",
+            "",
+        ]
+    for lr in deep:
+        entry = data.get("learners", {}).get(lr, {})
+        tuning = entry.get("tuning")
+        src = (
+            f"tuned: `{tuning['command']}`, {tuning['trials']} trials, best objective "
+            f"{tuning['best_value']:.3f} on {', '.join(tuning['tasks'])}"
+            if tuning and specs[lr]["hyperparams_status"] == "tuned"
+            else "defaults (see `sixaxis_avoid/benchmark/learners.py`), pending a tuning run"
+        )
+        values = ", ".join(f"`{k}`={v}" for k, v in sorted(specs[lr]["hyperparams"].items()))
+        out += [f"- **{lr}** — {src}. Values: {values}.", ""]
+    return out
+
+
+def table(rows: dict[str, dict[str, Any]], label: str) -> list[str]:
+    head = [
+        label,
+        "learner",
+        "runs",
+        "success",
+        "mean score",
+        "env steps (median)",
+        "1st success: steps / wall / CPU",
+        "convergence: steps / wall / CPU",
+        "Alg. 1 passes",
+        "Alg. 2 success (runs)",
+        "re-plans",
+    ]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for key, per in rows.items():
+        for lr, s in per.items():
+            if not s["runs"]:
+                continue
+            out.append(
+                "| "
+                + " | ".join(
+                    [
+                        key,
+                        lr,
+                        str(s["runs"]),
+                        fmt(s["success_rate"]),
+                        fmt(s["score_mean"], ".3f"),
+                        fmt_steps(s["env_steps_median"]),
+                        f"{fmt_steps(s['first_success_steps'])} / "
+                        f"{fmt_time(s['first_success_wall_s'])} / "
+                        f"{fmt_time(s['first_success_cpu_s'])} ({fmt(s['first_success_rate'])})",
+                        f"{fmt_steps(s['convergence_steps'])} / "
+                        f"{fmt_time(s['convergence_wall_s'])} / "
+                        f"{fmt_time(s['convergence_cpu_s'])} ({fmt(s['convergence_rate'])})",
+                        fmt(s["algorithm1_pass_rate"]),
+                        f"{fmt(s['algorithm2_success_rate'])} ({s['algorithm2_runs']})",
+                        fmt(s["replans_mean"], ".1f"),
+                    ]
+                )
+                + " |"
+            )
+    return out
+
+
+def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
+    m = a["manifest"]
+    suite = m["suite"]
+    agg = a["agg"]
+    learners = a["learners"]
+    rel = {k: os.path.relpath(v, out_path.parent) for k, v in figs.items()}
+
+    def metric(lr: str, key: str) -> str:
+        s = agg["learners"][lr]
+        return ci(s[key], s[f"{key}_ci"])
+
+    ranked = sorted(
+        learners, key=lambda lr: (-agg["learners"][lr]["iqm"], -agg["learners"][lr]["mean"])
+    )
+    any_alg2_missing = any(
+        r["result"].get("algorithm2", {}).get("available") is False for r in a["runs"]
+    )
+    tasks_lines = []
+    for t in a["tasks"]:
+        d = a["task_objs"][t].describe()
+        tasks_lines.append(
+            f"| {t} | {d['group']} | {'x'.join(map(str, d['grid']))} | {d['obstacles']} | "
+            f"{len(d['targets'])} | {', '.join(map(str, d['optimal_lengths']))} |"
+        )
+    poi = agg["poi"]
+    poi_learners = [x for x in learners if any(k.startswith(f"{x},") for k in poi)]
+    poi_rows = []
+    for x in poi_learners:
+        cells = []
+        for y in poi_learners:
+            p = poi.get(f"{x},{y}")
+            cells.append("—" if p is None else f"{p['p']:.2f} [{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]")
+        poi_rows.append(f"| **{x}** | " + " | ".join(cells) + " |")
+    L = [
+        "# Learner benchmark",
+        "",
+        "Generated by `python -m sixaxis_avoid.benchmark report` from the result files of the "
+        "study below (do not edit by hand; re-run the commands).",
+        "",
+        "```bash",
+        m["command"],
+        "python -m sixaxis_avoid.benchmark report --results RESULTS_DIR",
+        "```",
+        "",
+        f"Suite **{suite['name']}** version {suite['version']}: {suite.get('description', '')} "
+        f"{len(a['tasks'])} tasks x {len(a['seeds'])} seeds x {len(learners)} learners = "
+        f"{len(a['runs'])} runs, each a Ray task ({m['ray']}). Run {m['date']} on "
+        f"{m['machine']}; total wall time {m['wall_time_s_total']:.0f} s; load average at the "
+        f"end {m['load_average']}. Versions: "
+        + ", ".join(f"{k} {v}" for k, v in m["versions"].items())
+        + ".",
+        "",
+        "## Headline",
+        "",
+        "Ranked by IQM of the final score (95% stratified-bootstrap CI; overlapping intervals "
+        "are not a ranking):",
+        "",
+        *[
+            f"{i + 1}. **{lr}** ({title(lr)}): IQM {metric(lr, 'iqm')}, success "
+            f"{fmt(a['per'][lr]['success_rate'])}, median "
+            f"{fmt_steps(a['per'][lr]['env_steps_median'])} env steps."
+            for i, lr in enumerate(ranked)
+        ],
+        "",
+        *hyperparam_section(a),
+        "## Aggregate scores (rliable)",
+        "",
+        "Score of a run: SPL of its final greedy path (BFS optimum over the path's length if it "
+        "reaches the target, else 0), averaged over the task's evaluation targets. Intervals: 95% "
+        f"stratified bootstrap over runs ({a['reps']} replications, seeded).",
+        "",
+        "| learner | IQM | mean | optimality gap |",
+        "|---|---|---|---|",
+        *[
+            f"| {lr} | {metric(lr, 'iqm')} | {metric(lr, 'mean')} | "
+            f"{metric(lr, 'optimality_gap')} |"
+            for lr in learners
+        ],
+        "",
+        f"![IQM, mean and optimality gap]({rel['iqm']})",
+        "",
+        f"![Performance profiles]({rel['profiles']})",
+        "",
+        f"![Learning curves]({rel['curves']})",
+        "",
+        "### Probability of improvement",
+        "",
+        "P(row > column): the probability that a run of the row learner scores higher than a run "
+        "of the column learner on a task drawn at random (ties count half), 95% CI. The "
+        "reference (BFS) is left out.",
+        "",
+        "| | " + " | ".join(poi_learners) + " |",
+        "|---|" + "---|" * len(poi_learners),
+        *poi_rows,
+        "",
+        "## Per learner (all tasks)",
+        "",
+        *table({"all": a["per"]}, "tasks"),
+        "",
+        "## Per group",
+        "",
+        *table(a["per_group"], "group"),
+        "",
+        "## Per task",
+        "",
+        *table(a["per_task"], "task"),
+        "",
+        "## Tasks",
+        "",
+        "| task | group | grid | obstacles | targets | BFS optimum (moves) |",
+        "|---|---|---|---|---|---|",
+        *tasks_lines,
+        "",
+        f"Budgets: {json.dumps(suite['budgets'])}; Algorithm 2 re-plan caps per family: "
+        f"{json.dumps(suite.get('algorithm2', {}))}.",
+        "",
+        "## What the columns mean",
+        "",
+        "- **success**: fraction of evaluation targets the final greedy path reaches, averaged "
+        "over runs. Tabular Q-learning: the eq. 8 greedy rollout (fails on a collision or a "
+        "revisit). Deep learners: the deterministic policy from the start until the target, a "
+        "loop (a repeated cell and collision flag) or the step cap; bumps leave the terminal in "
+        "place and are not moves.",
+        "- **env steps**: env steps the learner used. Tabular Q-learning: the paper's episode "
+        "count (10000 unless the suite says otherwise); on goal tasks re-learned per target and "
+        "summed. Deep learners: the suite's budget (rounded up to a rollout by PPO/A2C).",
+        "- **1st success**: env steps and training time (wall / CPU, greedy evaluations "
+        "excluded) until the first training episode that reached a target; median over the runs "
+        "that had one (their fraction in brackets).",
+        "- **convergence**: the first checkpoint from which the greedy score stays at its final "
+        "value, for runs whose final score is above 0 (their fraction in brackets); checkpoints "
+        "are the suite's geometric grid of env steps.",
+        "- **Alg. 1 passes**: the whole arm follows the first learned path (Algorithm 1 from "
+        "beta_0). **Alg. 2 success**: the paper's re-planning loop, run by the core's "
+        "`sixaxis_avoid.plan(learner=...)` for every learner (deep learners retrain from scratch "
+        "per re-plan, within the suite's cap); the number of runs where it ran in brackets.",
+        *(
+            [
+                "- Some runs have no Algorithm 2 result: the core they ran with had no "
+                "`plan(learner=...)` (only the native learner's ran)."
+            ]
+            if any_alg2_missing
+            else []
+        ),
+        "",
+        "## How to run",
+        "",
+        "```bash",
+        "pip install -e '.[bench]'   # or: bash scripts/setup.sh",
+        "python -m sixaxis_avoid.benchmark tune --suite v1 --trials 10 --budget-scale 0.5",
+        "python -m sixaxis_avoid.benchmark run --suite v1 --budget-scale 0.5   # local Ray",
+        "python -m sixaxis_avoid.benchmark run --suite v1 --address auto --seeds 20 "
+        "--budget-scale 10   # a cluster",
+        "python -m sixaxis_avoid.benchmark report --results results/bench/v1",
+        "```",
+        "",
+        "A restarted `run` skips the runs whose result file is there (for the same spec).",
+        "",
+    ]
+    return "\n".join(L)
+
+
+def write_report(
+    results: Path, out: Path, figures_dir: Path | None = None, reps: int = stats.REPS
+) -> dict[str, Any]:
+    results, out = Path(results), Path(out)
+    figures_dir = Path(figures_dir) if figures_dir else out.parent / "figures" / "bench"
+    a = analyse(results, reps)
+    figs = figures(a, figures_dir)
+    atomic_write_text(out, markdown(a, figs, out))
+    summary = {
+        "learners": a["learners"],
+        "tasks": a["tasks"],
+        "seeds": a["seeds"],
+        "aggregates": a["agg"],
+        "per_learner": a["per"],
+        "per_group": a["per_group"],
+    }
+    atomic_write_text(figures_dir / "bench_summary.json", json.dumps(summary, indent=1) + "\n")
+    return a

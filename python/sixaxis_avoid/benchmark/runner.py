@@ -1,0 +1,393 @@
+"""Runs of a study: one (learner, task, seed) run is one Ray task, one result file.
+
+- :func:`plan_runs` lists a study's runs (their specs: everything a run depends on).
+- :func:`execute_run` is one run, a pure function of its spec (any machine, same result).
+- :func:`run_study` runs the unfinished ones on Ray (a local Ray on all cores by default, or
+  the cluster at ``address``), writes each result file atomically as it arrives, skips runs
+  whose file already holds a result for the same spec, and counts runs on a progress bar.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import os
+import platform
+import re
+import socket
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from sixaxis_avoid.benchmark import hyperparams as hpmod
+from sixaxis_avoid.benchmark._io import atomic_write_text
+from sixaxis_avoid.benchmark.algorithm2 import algorithm2_record
+from sixaxis_avoid.benchmark.learners import RunContext, family_of, resolve
+from sixaxis_avoid.benchmark.tasks import Suite, Task
+
+SCHEMA = 1
+
+
+# ------------------------------------------------------------------------------------------
+# Specs
+
+
+def budget_of(suite: Suite, family: str, task: Task, scale: float = 1.0) -> dict[str, Any]:
+    """A run's budget: env steps (and the native learner's episode cap)."""
+    b = {**suite.budgets, **task.spec.get("budgets", {})}
+    deep = int(b["deep_goal"] if task.is_goal and "deep_goal" in b else b["deep"])
+    deep = max(1, round(deep * scale))
+    if family == "native":
+        native = {"episodes": int(b.get("native_episodes", 10_000))}
+        if b.get("native_steps") is not None:
+            native["max_env_steps"] = int(b["native_steps"])
+        return {"env_steps": deep, "native": native}
+    if family == "reference":
+        return {"env_steps": 0}
+    return {"env_steps": deep}
+
+
+def plan_runs(
+    suite: Suite,
+    learners: list[str],
+    seeds: list[int] | None = None,
+    tasks: list[Task] | None = None,
+    hyperparams: str | Path = "v1",
+    budget_scale: float = 1.0,
+    overrides: dict[str, dict[str, Any]] | None = None,
+    tag: str | None = None,
+) -> list[dict[str, Any]]:
+    """The specs of a study's runs: learners x tasks x seeds (``tag`` prefixes their result
+    files, e.g. a tuning trial's number)."""
+    hp_file = hpmod.load(hyperparams)
+    specs = []
+    for learner in learners:
+        cls = resolve(learner)
+        family = family_of(cls)
+        values = hpmod.values_for(hp_file, learner, dict(getattr(cls, "defaults", {})))
+        values.update(suite.raw.get("overrides", {}).get(learner, {}))
+        values.update((overrides or {}).get(learner, {}))
+        for task in tasks if tasks is not None else suite.tasks:
+            budget = budget_of(suite, family, task, budget_scale)
+            hp = {**values, **budget.get("native", {})}
+            cap = suite.algorithm2.get(family, suite.algorithm2["deep"])
+            for seed in seeds if seeds is not None else suite.seeds:
+                specs.append(
+                    {
+                        "schema": SCHEMA,
+                        "suite": suite.name,
+                        "suite_version": suite.version,
+                        "learner": learner,
+                        "family": family,
+                        "task": {"id": task.id, "kind": task.kind, **task.spec},
+                        "seed": int(seed),
+                        "budget": budget["env_steps"],
+                        "checkpoints": suite.checkpoints(max(budget["env_steps"], 1))
+                        if family != "reference"
+                        else [],
+                        "hyperparams": hp,
+                        "hyperparams_status": "n/a"
+                        if family != "deep"
+                        else hpmod.status_for(hp_file, learner),
+                        "max_replans": int(cap),
+                        **({"tag": tag} if tag else {}),
+                    }
+                )
+    return specs
+
+
+def spec_hash(spec: dict[str, Any]) -> str:
+    return hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def run_key(spec: dict[str, Any]) -> str:
+    raw = f"{spec['task']['id']}__{spec['learner']}__s{spec['seed']}"
+    if spec.get("tag"):
+        raw = f"{spec['tag']}__{raw}"
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", raw)
+
+
+def task_of(spec: dict[str, Any]) -> Task:
+    t = dict(spec["task"])
+    return Task(id=t.pop("id"), kind=t.pop("kind"), spec=t)
+
+
+# ------------------------------------------------------------------------------------------
+# One run
+
+
+def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
+    """One (learner, task, seed) run: train, record the curve, score the greedy path, run
+    Algorithms 1 and 2 on it. ``result`` depends on the spec alone; ``timing`` and ``host``
+    on where it ran."""
+    import sixaxis_avoid as sa
+
+    try:  # one thread per run: the same result on any machine, and no oversubscription
+        import torch
+
+        torch.set_num_threads(1)
+    except ImportError:
+        pass
+    t0 = time.perf_counter()
+    task = task_of(spec)
+    cls = resolve(spec["learner"])
+    learner = cls(spec["hyperparams"])
+    ctx = RunContext(
+        task, spec["seed"], spec["budget"], learner.hyperparams, spec["checkpoints"], learner
+    )
+    learner.learn(ctx)
+    ctx.finish()
+    final = ctx.points[-1]
+    scores = [p["score"] for p in ctx.points]
+    conv = None
+    if final["score"] > 0:
+        k = len(scores) - 1
+        while k > 0 and scores[k - 1] == final["score"]:
+            k -= 1
+        conv = k
+    optimal = task.optimal_lengths
+    paths = final["paths"]
+    result: dict[str, Any] = {
+        "score": final["score"],
+        "success": final["success"],
+        "paths": paths,
+        "path_lengths": [None if p is None else len(p) - 1 for p in paths],
+        "optimal_lengths": optimal,
+        "env_steps": int(ctx.env_steps),
+        "episodes": int(ctx.episodes),
+        "curve": [
+            {"env_steps": p["env_steps"], "score": p["score"], "success": p["success"]}
+            for p in ctx.points
+        ],
+        "first_success": None
+        if ctx.first_success is None
+        else {k: ctx.first_success[k] for k in ("env_steps", "episode")},
+        "convergence": None if conv is None else {"env_steps": ctx.points[conv]["env_steps"]},
+    }
+    timing: dict[str, Any] = {
+        "wall_time_s": final["wall_time_s"],
+        "cpu_time_s": final["cpu_time_s"],
+        "curve": [
+            {"wall_time_s": p["wall_time_s"], "cpu_time_s": p["cpu_time_s"]} for p in ctx.points
+        ],
+        "first_success": None
+        if ctx.first_success is None
+        else {k: ctx.first_success[k] for k in ("wall_time_s", "cpu_time_s")},
+        "convergence": None
+        if conv is None
+        else {k: ctx.points[conv][k] for k in ("wall_time_s", "cpu_time_s")},
+    }
+    if hasattr(learner, "converged_episode"):
+        result["core_converged_episode"] = learner.converged_episode
+    if not task.is_goal:
+        path = paths[0]
+        alg1 = sa.PosePlanner(task.scenario).plan_poses(path) if path is not None else None
+        result["algorithm1"] = (
+            None
+            if alg1 is None
+            else {
+                "complete": bool(alg1["complete"]),
+                "blocked_cell": None
+                if alg1["blocked_cell"] is None
+                else list(alg1["blocked_cell"]),
+            }
+        )
+        result["algorithm2"], timing["algorithm2"] = algorithm2_record(
+            task.scenario,
+            spec["seed"],
+            learner.algorithm2_learner(ctx),
+            spec["max_replans"],
+            **learner.algorithm2_kwargs(),
+        )
+    timing["run_wall_time_s"] = time.perf_counter() - t0
+    return {
+        "schema": SCHEMA,
+        "key": run_key(spec),
+        "spec_hash": spec_hash(spec),
+        "spec": spec,
+        "result": result,
+        "timing": timing,
+        "host": {"hostname": socket.gethostname(), "pid": os.getpid(), "ray_node": ray_node()},
+    }
+
+
+def ray_node() -> str | None:
+    """The Ray node this process runs on (None outside Ray)."""
+    ray = sys.modules.get("ray")
+    if ray is None or not ray.is_initialized():
+        return None
+    return ray.get_runtime_context().get_node_id()
+
+
+# ------------------------------------------------------------------------------------------
+# Result files
+
+
+def run_path(out_dir: Path, spec: dict[str, Any]) -> Path:
+    return Path(out_dir) / "runs" / f"{run_key(spec)}.json"
+
+
+def finished(out_dir: Path, spec: dict[str, Any]) -> bool:
+    """A result file for this very spec is there (a changed spec re-runs)."""
+    p = run_path(out_dir, spec)
+    try:
+        return json.loads(p.read_text()).get("spec_hash") == spec_hash(spec)
+    except (OSError, json.JSONDecodeError):
+        return False
+
+
+def load_record(out_dir: Path, spec: dict[str, Any]) -> dict[str, Any]:
+    return json.loads(run_path(out_dir, spec).read_text())
+
+
+def write_run(out_dir: Path, record: dict[str, Any]) -> Path:
+    p = run_path(out_dir, record["spec"])
+    atomic_write_text(p, json.dumps(record, indent=1) + "\n")
+    return p
+
+
+def load_runs(out_dir: Path) -> list[dict[str, Any]]:
+    runs = []
+    for p in sorted((Path(out_dir) / "runs").glob("*.json")):
+        runs.append(json.loads(p.read_text()))
+    return runs
+
+
+# ------------------------------------------------------------------------------------------
+# Ray
+
+
+def init_ray(address: str | None, num_cpus: int | None) -> bool:
+    """Connect to the cluster at ``address`` or start a local Ray (all cores unless
+    ``num_cpus``); returns whether this call started it (and should shut it down)."""
+    import ray
+
+    if ray.is_initialized():
+        return False
+    path = os.pathsep.join(p for p in [os.getcwd(), os.environ.get("PYTHONPATH", "")] if p)
+    kw: dict[str, Any] = {
+        "log_to_driver": False,
+        "runtime_env": {"env_vars": {"PYTHONPATH": path}},
+    }
+    if address:
+        ray.init(address=address, **kw)
+    else:
+        ray.init(
+            num_cpus=num_cpus or os.cpu_count(),
+            include_dashboard=False,
+            object_store_memory=256 * 1024**2,
+            **kw,
+        )
+    return True
+
+
+def _progress(total: int, initial: int, enabled: bool) -> Any:
+    from tqdm.auto import tqdm
+
+    return tqdm(
+        total=total, initial=initial, unit="run", disable=not enabled, file=sys.stderr, smoothing=0
+    )
+
+
+def run_study(
+    specs: list[dict[str, Any]],
+    out_dir: Path,
+    *,
+    address: str | None = None,
+    num_cpus: int | None = None,
+    use_ray: bool = True,
+    progress: bool = True,
+    on_result: Callable[[dict[str, Any]], None] | None = None,
+) -> dict[str, Any]:
+    """Run the specs whose result file is missing; returns counts and failures."""
+    out_dir = Path(out_dir)
+    todo = [s for s in specs if not finished(out_dir, s)]
+    skipped = len(specs) - len(todo)
+    bar = _progress(len(specs), skipped, progress)
+    failures: list[tuple[str, str]] = []
+    t0 = time.perf_counter()
+
+    def done(record: dict[str, Any]) -> None:
+        write_run(out_dir, record)
+        if on_result:
+            on_result(record)
+        bar.update(1)
+
+    started = False
+    if not use_ray:
+        for s in todo:
+            done(execute_run(s))
+    elif todo:
+        import ray
+
+        started = init_ray(address, num_cpus)
+        try:
+            remote = ray.remote(num_cpus=1, max_retries=0)(execute_run)
+            pending = {remote.remote(s): s for s in todo}
+            while pending:
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                spec = pending.pop(ready[0])
+                try:
+                    done(ray.get(ready[0]))
+                except ray.exceptions.RayError as e:
+                    failures.append((run_key(spec), str(e).splitlines()[-1][:500]))
+                    bar.update(1)
+        finally:
+            if started:
+                ray.shutdown()
+    bar.close()
+    return {
+        "runs": len(specs),
+        "skipped": skipped,
+        "ran": len(todo) - len(failures),
+        "failures": failures,
+        "wall_time_s": time.perf_counter() - t0,
+    }
+
+
+# ------------------------------------------------------------------------------------------
+# Study manifest
+
+
+def machine() -> str:
+    """The CPU, core count and OS (the core's description when it has one)."""
+    from sixaxis_avoid import _core
+
+    describe = getattr(_core, "machine", None)
+    if describe is not None:
+        return describe()
+    cpu = platform.processor() or platform.machine()
+    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}"
+
+
+def versions() -> dict[str, str]:
+    import importlib.metadata as md
+
+    import sixaxis_avoid
+
+    out = {"python": platform.python_version(), "sixaxis_avoid": sixaxis_avoid.__version__}
+    for pkg in ("numpy", "gymnasium", "stable_baselines3", "sb3_contrib", "torch", "ray"):
+        try:
+            out[pkg] = md.version(pkg.replace("_", "-"))
+        except md.PackageNotFoundError:
+            pass
+    return out
+
+
+def write_manifest(out_dir: Path, manifest: dict[str, Any]) -> None:
+    manifest = {
+        **manifest,
+        "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "machine": machine(),
+        "versions": versions(),
+        "load_average": [round(x, 2) for x in os.getloadavg()],
+    }
+    atomic_write_text(Path(out_dir) / "study.json", json.dumps(manifest, indent=1) + "\n")
+
+
+def mean_or_none(xs: list[float]) -> float | None:
+    return float(np.mean(xs)) if xs else None

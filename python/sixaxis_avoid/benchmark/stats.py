@@ -1,0 +1,197 @@
+"""Statistics of a study, with rliable (Agarwal et al., NeurIPS 2021).
+
+Per learner, over the reported tasks and seeds: the final score's IQM, mean and optimality
+gap with 95% stratified-bootstrap confidence intervals, the performance profile (fraction of
+runs scoring above tau) with bands, the probability of improvement of each learner over each
+other, and IQM learning curves over env steps with bands; plus success rate and the env steps
+and seconds (wall and CPU) to the first success and to convergence.
+
+The score of a run is SPL, success weighted by path length: the BFS optimum over the greedy
+path's length if the path reaches the target, else 0 (1 = optimal), averaged over the task's
+evaluation targets (goal tasks have several).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+#: Bootstrap replications (rliable's performance-profile default).
+REPS = 2000
+TAUS = np.linspace(0.0, 1.0, 41)
+
+
+def rliable_library() -> Any:
+    """``rliable.library`` (its stratified bootstraps need arch < 8, which needs pandas < 3:
+    the ``bench`` extra pins both). rliable draws its resampling indices from NumPy's global
+    generator: :func:`seeded` seeds it, so the intervals are reproducible."""
+    from rliable import library
+
+    return library
+
+
+def seeded(seed: int = 0) -> None:
+    np.random.seed(seed)  # noqa: NPY002 (rliable resamples with the global generator)
+
+
+def score_matrices(
+    runs: list[dict[str, Any]], learners: list[str], tasks: list[str]
+) -> tuple[dict[str, np.ndarray], list[int]]:
+    """Per learner, final scores as (seeds, tasks); only seeds every (learner, task) has."""
+    by = {(r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]): r for r in runs}
+    seeds = sorted({k[2] for k in by})
+    common = [s for s in seeds if all((lr, t, s) in by for lr in learners for t in tasks)]
+    out = {
+        lr: np.array([[by[(lr, t, s)]["result"]["score"] for t in tasks] for s in common])
+        for lr in learners
+    }
+    return out, common
+
+
+def curve_on(grid: np.ndarray, curve: list[dict[str, Any]], key: str = "score") -> np.ndarray:
+    """A run's curve as a step function on ``grid`` (the last value carried forward; 0 before
+    the first point)."""
+    xs = np.array([p["env_steps"] for p in curve])
+    ys = np.array([p[key] for p in curve])
+    idx = np.searchsorted(xs, grid, side="right") - 1
+    return np.where(idx >= 0, ys[np.clip(idx, 0, None)], 0.0)
+
+
+def aggregates(
+    scores: dict[str, np.ndarray],
+    seed: int = 0,
+    reps: int = REPS,
+    poi_exclude: tuple[str, ...] = (),
+) -> dict[str, Any]:
+    """IQM, mean and optimality gap with 95% CIs; performance profiles; probability of
+    improvement for every ordered pair of learners (but those in ``poi_exclude``)."""
+    from rliable import metrics
+
+    rly = rliable_library()
+
+    def agg(x: np.ndarray) -> np.ndarray:
+        return np.array(
+            [
+                metrics.aggregate_iqm(x),
+                metrics.aggregate_mean(x),
+                metrics.aggregate_optimality_gap(x),
+            ]
+        )
+
+    seeded(seed)
+    point, ci = rly.get_interval_estimates(scores, agg, reps=reps)
+    seeded(seed)
+    profiles, profile_cis = rly.create_performance_profile(scores, TAUS, reps=reps)
+    names = [k for k in scores if k not in poi_exclude]
+    # P(Y > X) = 1 - P(X > Y): one bootstrap per unordered pair.
+    pairs = {
+        f"{a},{b}": (scores[a], scores[b]) for i, a in enumerate(names) for b in names[i + 1 :]
+    }
+    poi_point: dict[str, Any] = {}
+    poi_ci: dict[str, Any] = {}
+    if pairs:
+        seeded(seed)
+        poi_point, poi_ci = rly.get_interval_estimates(
+            pairs, metrics.probability_of_improvement, reps=reps
+        )
+    out: dict[str, Any] = {"learners": {}, "taus": TAUS.tolist(), "poi": {}}
+    for k in scores:
+        out["learners"][k] = {
+            "iqm": float(point[k][0]),
+            "iqm_ci": [float(ci[k][0][0]), float(ci[k][1][0])],
+            "mean": float(point[k][1]),
+            "mean_ci": [float(ci[k][0][1]), float(ci[k][1][1])],
+            "optimality_gap": float(point[k][2]),
+            "optimality_gap_ci": [float(ci[k][0][2]), float(ci[k][1][2])],
+            "profile": profiles[k].tolist(),
+            "profile_ci": [profile_cis[k][0].tolist(), profile_cis[k][1].tolist()],
+        }
+    for pair in pairs:
+        p = float(np.asarray(poi_point[pair]).ravel()[0])
+        lo, hi = float(np.ravel(poi_ci[pair][0])[0]), float(np.ravel(poi_ci[pair][1])[0])
+        a, b = pair.split(",")
+        out["poi"][pair] = {"p": p, "ci": [lo, hi]}
+        out["poi"][f"{b},{a}"] = {"p": 1.0 - p, "ci": [1.0 - hi, 1.0 - lo]}
+    return out
+
+
+def iqm_curves(
+    runs: list[dict[str, Any]], learners: list[str], tasks: list[str], seeds: list[int],
+    grid: np.ndarray, seed: int = 0, reps: int = REPS // 4,
+) -> dict[str, Any]:  # fmt: skip
+    """IQM of the score over (seeds, tasks) at each env step of ``grid``, with 95% CIs."""
+    import scipy.stats
+
+    rly = rliable_library()
+    by = {(r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]): r for r in runs}
+    data = {
+        lr: np.array(
+            [[curve_on(grid, by[(lr, t, s)]["result"]["curve"]) for t in tasks] for s in seeds]
+        )
+        for lr in learners
+    }
+
+    def iqm_at(x: np.ndarray) -> np.ndarray:
+        # rliable's aggregate_iqm at every grid point at once (the same trimmed mean).
+        return scipy.stats.trim_mean(x.reshape(-1, x.shape[-1]), proportiontocut=0.25, axis=0)
+
+    seeded(seed)
+    point, ci = rly.get_interval_estimates(data, iqm_at, reps=reps)
+    return {
+        lr: {
+            "iqm": point[lr].tolist(),
+            "lo": ci[lr][0].tolist(),
+            "hi": ci[lr][1].tolist(),
+            # The curve is defined up to the longest run (later values are carried forward).
+            "max_env_steps": max(
+                by[(lr, t, s)]["result"]["curve"][-1]["env_steps"] for t in tasks for s in seeds
+            ),
+        }
+        for lr in learners
+    }
+
+
+def median_or_none(xs: list[float]) -> float | None:
+    return float(np.median(xs)) if xs else None
+
+
+def milestone(runs: list[dict[str, Any]], key: str, prefix: str) -> dict[str, float | None]:
+    """Medians of env steps, wall and CPU seconds to a milestone (first success,
+    convergence) over the runs that reached it."""
+    return {
+        f"{prefix}_steps": median_or_none([r["result"][key]["env_steps"] for r in runs]),
+        f"{prefix}_wall_s": median_or_none([r["timing"][key]["wall_time_s"] for r in runs]),
+        f"{prefix}_cpu_s": median_or_none([r["timing"][key]["cpu_time_s"] for r in runs]),
+    }
+
+
+def per_learner(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """Plain figures over a set of runs: success rate, score, and the medians (over the runs
+    that got there) of env steps and seconds to the first success and to convergence."""
+    n = len(runs)
+    firsts = [r for r in runs if r["result"]["first_success"] is not None]
+    convs = [r for r in runs if r["result"]["convergence"] is not None]
+    alg2 = [r["result"]["algorithm2"] for r in runs if r["result"].get("algorithm2")]
+    alg2_ok = [a for a in alg2 if a.get("available")]
+    alg1 = [r["result"].get("algorithm1") for r in runs if "algorithm1" in r["result"]]
+    return {
+        "runs": n,
+        "success_rate": float(np.mean([r["result"]["success"] for r in runs])) if n else None,
+        "score_mean": float(np.mean([r["result"]["score"] for r in runs])) if n else None,
+        "env_steps_median": median_or_none([r["result"]["env_steps"] for r in runs]),
+        "wall_time_s_median": median_or_none([r["timing"]["wall_time_s"] for r in runs]),
+        "cpu_time_s_median": median_or_none([r["timing"]["cpu_time_s"] for r in runs]),
+        "first_success_rate": len(firsts) / n if n else None,
+        **milestone(firsts, "first_success", "first_success"),
+        "convergence_rate": len(convs) / n if n else None,
+        **milestone(convs, "convergence", "convergence"),
+        "algorithm1_pass_rate": float(np.mean([bool(a and a["complete"]) for a in alg1]))
+        if alg1
+        else None,
+        "algorithm2_runs": len(alg2_ok),
+        "algorithm2_success_rate": float(np.mean([a["success"] for a in alg2_ok]))
+        if alg2_ok
+        else None,
+        "replans_mean": float(np.mean([a["replans"] for a in alg2_ok])) if alg2_ok else None,
+    }

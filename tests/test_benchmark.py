@@ -1,0 +1,145 @@
+"""The learner benchmark end to end: the quick suite on a local Ray, on a simulated two-node
+Ray cluster (same per-run results), resume, and the report from its result files."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import pytest
+import ray
+from sixaxis_avoid.benchmark import load_suite, plan_runs, runner
+from sixaxis_avoid.benchmark.algorithm2 import plan_takes_learner
+from sixaxis_avoid.benchmark.learners import BUILTIN
+from sixaxis_avoid.benchmark.report import write_report
+
+LEARNERS = list(BUILTIN)
+
+
+@pytest.fixture(scope="module")
+def suite():
+    return load_suite("quick")
+
+
+@pytest.fixture(scope="module")
+def specs(suite):
+    return plan_runs(suite, LEARNERS)
+
+
+@pytest.fixture(scope="module")
+def local(tmp_path_factory, specs):
+    """The quick suite on a local Ray (2 CPUs)."""
+    out = tmp_path_factory.mktemp("bench-local")
+    res = runner.run_study(specs, out, num_cpus=2, progress=False)
+    assert not res["failures"], res["failures"]
+    assert not ray.is_initialized(), "run_study left the Ray it started running"
+    runner.write_manifest(
+        out,
+        {
+            "command": "pytest",
+            "suite": load_suite("quick").raw,
+            "learners": LEARNERS,
+            "tasks": [t.id for t in load_suite("quick").tasks],
+            "seeds": sorted({s["seed"] for s in specs}),
+            "runs": res["runs"],
+            "wall_time_s_total": res["wall_time_s"],
+            "ray": "local",
+        },
+    )
+    return out, {r["key"]: r for r in runner.load_runs(out)}
+
+
+def test_quick_suite_every_run_has_a_sane_result(local, specs, suite):
+    _, runs = local
+    assert len(runs) == len(specs) == len(LEARNERS) * len(suite.tasks) * len(suite.seeds)
+    assert {runner.run_key(s) for s in specs} == set(runs)
+    for r in runs.values():
+        res, spec = r["result"], r["spec"]
+        assert r["spec_hash"] == runner.spec_hash(spec)
+        assert 0.0 <= res["score"] <= res["success"] <= 1.0
+        assert len(res["paths"]) == len(res["optimal_lengths"])
+        steps = [p["env_steps"] for p in res["curve"]]
+        assert steps == sorted(steps) and steps[-1] == res["env_steps"]
+        assert res["curve"][-1]["score"] == res["score"]
+        for p, opt in zip(res["paths"], res["optimal_lengths"]):
+            if p is not None:
+                assert len(p) - 1 >= opt
+        if res["first_success"] is not None:
+            assert res["first_success"]["env_steps"] <= res["env_steps"]
+            assert r["timing"]["first_success"]["wall_time_s"] >= 0
+        if res["convergence"] is not None:
+            assert res["score"] > 0 and res["convergence"]["env_steps"] <= res["env_steps"]
+        if spec["family"] == "deep":
+            assert res["env_steps"] >= spec["budget"]
+        if spec["task"]["kind"] == "goal":
+            assert "algorithm2" not in res and len(res["paths"]) == spec["task"]["eval_targets"]
+        else:
+            alg2 = res["algorithm2"]
+            assert alg2["available"] == (plan_takes_learner() or spec["learner"].startswith("q_"))
+        if spec["learner"] == "bfs":
+            assert res["score"] == 1.0 and res["env_steps"] == 0
+    # With the quick budget the tabular learner still finds the optimum somewhere.
+    assert any(
+        r["result"]["score"] == 1.0 for r in runs.values() if r["spec"]["learner"] == "q_assist"
+    )
+
+
+def test_two_node_cluster_gives_the_same_results(local, specs, tmp_path):
+    from ray.cluster_utils import Cluster
+
+    _, runs = local
+    cluster = Cluster(
+        initialize_head=True, head_node_args={"num_cpus": 1, "include_dashboard": False}
+    )
+    try:
+        cluster.add_node(num_cpus=1)
+        cluster.wait_for_nodes()
+        res = runner.run_study(specs, tmp_path, address=cluster.address, progress=False)
+    finally:
+        cluster.shutdown()
+    assert not res["failures"], res["failures"]
+    remote = {r["key"]: r for r in runner.load_runs(tmp_path)}
+    assert set(remote) == set(runs)
+    assert len({r["host"]["ray_node"] for r in remote.values()}) == 2, "one node did all"
+    for key, r in remote.items():
+        assert r["result"] == runs[key]["result"], key
+
+
+def test_resume_skips_finished_runs(local, specs, tmp_path):
+    out, runs = local
+    shutil.copytree(out / "runs", tmp_path / "runs")
+    again = runner.run_study(specs, tmp_path, use_ray=False, progress=False)
+    assert again["skipped"] == len(specs) and again["ran"] == 0
+    # A lost file and a file of another spec are run again, and only they.
+    lost = tmp_path / "runs" / "paper_simple__q_assist__s0.json"
+    lost.unlink()
+    stale = tmp_path / "runs" / "gen-easy-0__bfs__s1.json"
+    rec = json.loads(stale.read_text())
+    rec["spec_hash"] = "something-else"
+    stale.write_text(json.dumps(rec))
+    again = runner.run_study(specs, tmp_path, use_ray=False, progress=False)
+    assert (again["skipped"], again["ran"]) == (len(specs) - 2, 2)
+    for p in (lost, stale):
+        got = json.loads(p.read_text())
+        assert got["result"] == runs[p.stem]["result"]
+    assert not list((tmp_path / "runs").glob(".*.tmp")), "a temporary file was left behind"
+
+
+def test_report_from_the_quick_suite(local, tmp_path):
+    out, _ = local
+    md = tmp_path / "BENCHMARKS.md"
+    a = write_report(out, md, reps=100)
+    text = md.read_text()
+    for want in ("IQM", "Probability of improvement", "Performance profiles", "| q_assist |"):
+        assert want in text
+    # The placeholder hyperparameter file says plainly that the deep learners are untuned.
+    assert "pending a tuning run" in text
+    for name in ("bench_curves.png", "bench_profiles.png", "bench_iqm.png"):
+        png = tmp_path / "figures" / "bench" / name
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert f"figures/bench/{name}" in text
+    agg = a["agg"]["learners"]
+    assert agg["bfs"]["iqm"] == 1.0 and agg["bfs"]["iqm_ci"] == [1.0, 1.0]
+    for lr, s in agg.items():
+        assert s["iqm_ci"][0] <= s["iqm"] <= s["iqm_ci"][1], lr
+        assert abs(s["optimality_gap"] - (1 - s["mean"])) < 1e-9, lr

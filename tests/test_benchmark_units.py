@@ -1,0 +1,249 @@
+"""The learner benchmark's parts: suites, learners (a user's too), Algorithm 2 through the
+core, statistics, tuning, the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import sixaxis_avoid as sa
+from sixaxis_avoid.benchmark import __main__ as cli
+from sixaxis_avoid.benchmark import execute_run, load_suite, plan_runs, resolve, stats
+from sixaxis_avoid.benchmark import hyperparams as hpmod
+from sixaxis_avoid.benchmark.algorithm2 import (
+    Algorithm2Unavailable,
+    algorithm2,
+    plan_takes_learner,
+)
+from sixaxis_avoid.benchmark.learners import LearnerError, spl
+from sixaxis_avoid.benchmark.tasks import SuiteError
+
+needs_generic_plan = pytest.mark.skipif(
+    not plan_takes_learner(),
+    reason="needs sixaxis_avoid.plan(learner=...) (the generic Algorithm 2 loop, arch branch)",
+)
+
+
+def write_suite(tmp_path, **changes):
+    raw = json.loads(load_suite("quick").path.read_text())
+    raw.update(changes)
+    p = tmp_path / "s.json"
+    p.write_text(json.dumps(raw))
+    return p
+
+
+# -- suites -----------------------------------------------------------------------------------
+
+
+def test_shipped_suites_load_and_their_tasks_build():
+    for name in ("quick", "v1"):
+        suite = load_suite(name)
+        suite.check_disjoint()
+        assert len(suite.seeds) >= 2
+        kinds = {t.kind for t in suite.tasks}
+        assert kinds == {"scenario", "generated", "goal"}, name
+        for t in suite.tasks + suite.tuning_tasks:
+            d = t.describe()
+            assert len(d["targets"]) == len(d["optimal_lengths"]) >= 1
+            assert all(n >= 1 for n in d["optimal_lengths"])
+    v1 = load_suite("v1")
+    assert len(v1.seeds) >= 10
+    levels = {t.spec["level"] for t in v1.tasks if t.kind == "generated"}
+    assert levels == {"easy", "medium", "hard"}
+    # Graded: harder levels have more clutter.
+    density = {t.spec["level"]: t.describe()["density"] for t in v1.tasks if t.kind == "generated"}
+    assert density["easy"] < density["medium"] < density["hard"]
+
+
+def test_goal_task_targets_are_fixed_reachable_and_not_the_start():
+    t = load_suite("v1").task("goal-paper_simple")
+    again = load_suite("v1").task("goal-paper_simple")
+    assert t.eval_targets == again.eval_targets
+    assert len(set(t.eval_targets)) == len(t.eval_targets) == 8
+    start = tuple(t.scenario.start)
+    for cell in t.eval_targets:
+        assert cell != start and sa.shortest_path(t.world(cell)) is not None
+
+
+def test_bad_suites_name_the_field(tmp_path):
+    with pytest.raises(SuiteError, match="unknown"):
+        load_suite("no-such-suite")
+    bad = write_suite(tmp_path, tasks=[{"id": "x", "kind": "maze"}])
+    with pytest.raises(SuiteError, match=r"tasks\[0\]\.kind"):
+        load_suite(bad)
+    bad = write_suite(tmp_path, tasks=[{"id": "x", "kind": "generated"}])
+    with pytest.raises(SuiteError, match=r"tasks\[0\]\.seed"):
+        load_suite(bad)
+    overlap = write_suite(
+        tmp_path,
+        tuning={
+            "seeds": [1],
+            "tasks": [{"id": "t", "kind": "scenario", "scenario": "paper_simple"}],
+        },
+    )
+    with pytest.raises(SuiteError, match="disjoint"):
+        load_suite(overlap).check_disjoint()
+
+
+# -- learners ---------------------------------------------------------------------------------
+
+
+def test_spl():
+    assert spl(None, 5) == 0.0
+    assert spl([(0, 0, 0)] * 6, 5) == 1.0
+    assert spl([(0, 0, 0)] * 11, 5) == 0.5
+
+
+def test_resolve_builtin_and_user_learners():
+    assert resolve("ppo").family == "deep" and resolve("q_assist").family == "native"
+    assert resolve("bench_user_learner:ScriptedBFS").__name__ == "ScriptedBFS"
+    with pytest.raises(LearnerError, match="not built in"):
+        resolve("sarsa")
+    with pytest.raises(LearnerError, match="cannot import"):
+        resolve("no_such_module_xyz:Learner")
+    with pytest.raises(LearnerError, match="not a class"):
+        resolve("json:dumps")
+
+
+def test_user_learner_runs_and_its_steps_are_counted():
+    suite = load_suite("quick")
+    spec = plan_runs(
+        suite, ["bench_user_learner:ScriptedBFS"], seeds=[0], tasks=[suite.task("paper_simple")]
+    )[0]
+    rec = execute_run(spec)
+    res = rec["result"]
+    assert res["env_steps"] == spec["budget"] and res["score"] == 1.0
+    # It walks the 9-move optimum: the first episode reaches the target at step 9.
+    assert res["first_success"] == {"env_steps": 9, "episode": 0}
+    assert res["episodes"] == spec["budget"] // 9
+    assert [p["env_steps"] for p in res["curve"]][:-1] == [
+        c for c in spec["checkpoints"] if c <= spec["budget"]
+    ][: len(res["curve"]) - 1]
+    assert res["convergence"] == {"env_steps": res["curve"][0]["env_steps"]}
+
+
+def test_native_learner_curve_is_the_core_run():
+    """The native learner's final path and step count are sixaxis_avoid.train's."""
+    suite = load_suite("quick")
+    task = suite.task("gen-easy-0")
+    spec = plan_runs(suite, ["q_assist"], seeds=[3], tasks=[task])[0]
+    res = execute_run(spec)["result"]
+    core = sa.train(task.scenario, seed=3, assist=True, episodes=spec["hyperparams"]["episodes"])
+    assert res["env_steps"] == core.total_steps
+    assert res["paths"][0] == (None if core.path is None else [list(c) for c in core.path])
+    assert res["core_converged_episode"] == core.converged_episode
+    assert len(res["curve"]) >= 3
+
+
+def test_deep_learner_is_deterministic_per_seed():
+    suite = load_suite("quick")
+    spec = plan_runs(suite, ["dqn"], seeds=[1], tasks=[suite.task("paper_simple")])[0]
+    assert execute_run(spec)["result"] == execute_run(spec)["result"]
+
+
+# -- Algorithm 2 through the core ---------------------------------------------------------------
+
+
+def test_algorithm2_native_is_the_core_plan():
+    s = sa.Scenario("replan_clutter")
+    ours = algorithm2(s, seed=0, learner="qlearning", episodes=2000, assist=True)
+    core = sa.plan(s, seed=0, episodes=2000, assist=True)
+    assert (ours.success, ours.replans, ours.path) == (core.success, core.replans, core.path)
+
+
+def test_algorithm2_other_learners_need_the_generic_loop():
+    s = sa.Scenario("replan_clutter")
+    if plan_takes_learner():
+        r = algorithm2(s, seed=0, learner="bfs")
+        assert r.success and r.replans >= 1
+    else:
+        with pytest.raises(Algorithm2Unavailable, match="learner"):
+            algorithm2(s, seed=0, learner="bfs")
+
+
+@needs_generic_plan
+def test_algorithm2_user_learner_matches_bfs_through_the_core():
+    """A user's learner that returns BFS paths gives the core's BFS result: the loop is the
+    core's, round 0 reuses the run's path, re-plans retrain a fresh learner."""
+    suite = load_suite("quick")
+    task_spec = {"id": "replan_clutter", "kind": "scenario", "scenario": "replan_clutter"}
+    spec = plan_runs(suite, ["bench_user_learner:ScriptedBFS"], seeds=[0])[0]
+    spec["task"] = task_spec
+    spec["max_replans"] = 20
+    alg2 = execute_run(spec)["result"]["algorithm2"]
+    core = sa.plan(sa.Scenario("replan_clutter"), seed=0, learner="bfs", max_replans=20)
+    assert alg2["available"] and alg2["success"] == core.success
+    assert alg2["replans"] == core.replans >= 1
+    assert alg2["added_obstacles"] == [list(c) for c in core.added_obstacles]
+
+
+# -- statistics ---------------------------------------------------------------------------------
+
+
+def test_aggregates_on_known_scores():
+    rng = np.random.default_rng(0)
+    good = np.clip(rng.normal(0.8, 0.05, size=(10, 4)), 0, 1)
+    bad = np.clip(rng.normal(0.2, 0.05, size=(10, 4)), 0, 1)
+    a = stats.aggregates({"good": good, "bad": bad}, reps=200)
+    g = a["learners"]["good"]
+    assert g["iqm_ci"][0] <= g["iqm"] <= g["iqm_ci"][1]
+    assert abs(g["mean"] - good.mean()) < 1e-12
+    assert a["poi"]["good,bad"]["p"] == 1.0 and a["poi"]["bad,good"]["p"] == 0.0
+    assert g["profile"][0] == 1.0 and a["learners"]["bad"]["profile"][-1] == 0.0
+    # Seeded: the same intervals again.
+    assert stats.aggregates({"good": good, "bad": bad}, reps=200) == a
+
+
+def test_curve_on_is_a_step_function():
+    curve = [{"env_steps": 10, "score": 0.5}, {"env_steps": 100, "score": 1.0}]
+    got = stats.curve_on(np.array([1, 10, 50, 100, 1000]), curve)
+    assert got.tolist() == [0.0, 0.5, 0.5, 1.0, 1.0]
+
+
+# -- hyperparameters and tuning -----------------------------------------------------------------
+
+
+def test_placeholder_hyperparams_say_defaults_and_run_reads_the_file(tmp_path):
+    data = hpmod.load("v1")
+    assert data["status"] == "defaults" and "PLACEHOLDER" in data["note"]
+    assert hpmod.status_for(data, "ppo") == "defaults"
+    suite = load_suite("quick")
+    spec = plan_runs(suite, ["ppo"], seeds=[0])[0]
+    assert spec["hyperparams_status"] == "defaults"
+    hp_file = tmp_path / "hp.json"
+    hpmod.record_tuning(hp_file, "ppo", {"ent_coef": 0.123}, {"command": "x", "trials": 1})
+    spec = plan_runs(suite, ["ppo"], seeds=[0], hyperparams=hp_file)[0]
+    assert spec["hyperparams_status"] == "tuned"
+    assert spec["hyperparams"]["ent_coef"] == 0.123
+
+
+def test_tune_writes_the_chosen_values_with_command_and_trials(tmp_path):
+    out = tmp_path / "hp.json"
+    argv = [
+        "tune", "--suite", "quick", "--learners", "a2c", "--trials", "2", "--no-ray",
+        "--no-progress", "--out", str(out), "--log-dir", str(tmp_path / "log"),
+    ]  # fmt: skip
+    assert cli.main(argv) == 0
+    data = json.loads(out.read_text())
+    entry = data["learners"]["a2c"]
+    assert entry["status"] == "tuned" and entry["tuning"]["trials"] == 2
+    assert entry["tuning"]["command"].startswith("python -m sixaxis_avoid.benchmark tune")
+    assert entry["tuning"]["tasks"] == ["tune-gen-medium-1000"]
+    assert 0.0 <= entry["tuning"]["best_value"] <= 1.0
+    assert {"learning_rate", "n_steps", "n_envs"} <= set(entry["values"])
+
+
+# -- command line -------------------------------------------------------------------------------
+
+
+def test_cli_list_and_errors(capsys):
+    assert cli.main(["list", "--suite", "quick", "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)
+    assert [t["id"] for t in listed["tasks"]] == [t.id for t in load_suite("quick").tasks]
+    assert set(listed["learners"]) == {"q_assist", "q_plain", "bfs", "dqn", "qrdqn", "ppo", "a2c"}
+    assert cli.main(["run", "--suite", "quick", "--learners", "sarsa", "--no-ray"]) == 2
+    assert "sarsa" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        cli.main(["run", "--budget-scale", "0"])
+    assert cli.parse_seeds("3") == [0, 1, 2] and cli.parse_seeds("4,7") == [4, 7]
