@@ -11,18 +11,9 @@ import sixaxis_avoid as sa
 from sixaxis_avoid.benchmark import __main__ as cli
 from sixaxis_avoid.benchmark import execute_run, load_suite, plan_runs, resolve, stats
 from sixaxis_avoid.benchmark import hyperparams as hpmod
-from sixaxis_avoid.benchmark.algorithm2 import (
-    Algorithm2Unavailable,
-    algorithm2,
-    plan_takes_learner,
-)
+from sixaxis_avoid.benchmark.algorithm2 import algorithm2
 from sixaxis_avoid.benchmark.learners import LearnerError, spl
 from sixaxis_avoid.benchmark.tasks import SuiteError
-
-needs_generic_plan = pytest.mark.skipif(
-    not plan_takes_learner(),
-    reason="needs sixaxis_avoid.plan(learner=...) (the generic Algorithm 2 loop, arch branch)",
-)
 
 
 def write_suite(tmp_path, **changes):
@@ -152,17 +143,12 @@ def test_algorithm2_native_is_the_core_plan():
     assert (ours.success, ours.replans, ours.path) == (core.success, core.replans, core.path)
 
 
-def test_algorithm2_other_learners_need_the_generic_loop():
+def test_algorithm2_bfs_runs_through_the_core_loop():
     s = sa.Scenario("replan_clutter")
-    if plan_takes_learner():
-        r = algorithm2(s, seed=0, learner="bfs")
-        assert r.success and r.replans >= 1
-    else:
-        with pytest.raises(Algorithm2Unavailable, match="learner"):
-            algorithm2(s, seed=0, learner="bfs")
+    r = algorithm2(s, seed=0, learner="bfs")
+    assert r.success and r.replans >= 1
 
 
-@needs_generic_plan
 def test_algorithm2_user_learner_matches_bfs_through_the_core():
     """A user's learner that returns BFS paths gives the core's BFS result: the loop is the
     core's, round 0 reuses the run's path, re-plans retrain a fresh learner."""

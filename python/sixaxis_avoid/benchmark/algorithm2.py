@@ -8,50 +8,15 @@ site; this package never loops over re-plans itself.
 
 from __future__ import annotations
 
-import functools
-import inspect
 import time
 from typing import Any
 
 
-class Algorithm2Unavailable(RuntimeError):
-    """The installed core's ``plan`` takes no ``learner`` (it predates the generic loop)."""
-
-
-@functools.lru_cache(maxsize=1)
-def plan_takes_learner() -> bool:
-    """Whether ``sixaxis_avoid.plan`` accepts ``learner=`` (the generic Algorithm 2 loop)."""
-    import sixaxis_avoid as sa
-
-    try:
-        return "learner" in inspect.signature(sa.plan).parameters
-    except (TypeError, ValueError):  # no signature exposed: ask the function itself
-        try:
-            sa.plan("no-such-scenario", learner="bfs")
-        except TypeError:
-            return False
-        except ValueError:
-            return True
-        return True
-
-
 def algorithm2(scenario: Any, *, seed: int, learner: Any, **kwargs: Any) -> Any:
-    """``sixaxis_avoid.plan(scenario, seed=seed, learner=learner, **kwargs)``.
-
-    Without the generic loop in the installed core, the native learner (``"qlearning"``, the
-    core's default) still runs through ``plan``; any other raises
-    :class:`Algorithm2Unavailable`.
-    """
+    """``sixaxis_avoid.plan(scenario, seed=seed, learner=learner, **kwargs)``: the core's loop."""
     import sixaxis_avoid as sa
 
-    if plan_takes_learner():
-        return sa.plan(scenario, seed=seed, learner=learner, **kwargs)
-    if learner == "qlearning":
-        return sa.plan(scenario, seed=seed, **kwargs)
-    raise Algorithm2Unavailable(
-        "sixaxis_avoid.plan(learner=...) is not in this build: Algorithm 2 for "
-        f"{learner if isinstance(learner, str) else type(learner).__name__} needs it"
-    )
+    return sa.plan(scenario, seed=seed, learner=learner, **kwargs)
 
 
 def algorithm2_record(
@@ -59,12 +24,8 @@ def algorithm2_record(
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Run Algorithm 2; return (result, timing) for the run's record."""
     t0 = time.perf_counter()
-    try:
-        r = algorithm2(scenario, seed=seed, learner=learner, max_replans=max_replans, **kwargs)
-    except Algorithm2Unavailable as e:
-        return {"available": False, "reason": str(e)}, {}
+    r = algorithm2(scenario, seed=seed, learner=learner, max_replans=max_replans, **kwargs)
     result = {
-        "available": True,
         "success": bool(r.success),
         "replans": int(r.replans),
         "max_replans": int(max_replans),

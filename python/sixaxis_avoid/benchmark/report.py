@@ -307,9 +307,6 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
     ranked = sorted(
         learners, key=lambda lr: (-agg["learners"][lr]["iqm"], -agg["learners"][lr]["mean"])
     )
-    any_alg2_missing = any(
-        r["result"].get("algorithm2", {}).get("available") is False for r in a["runs"]
-    )
     tasks_lines = []
     for t in a["tasks"]:
         d = a["task_objs"][t].describe()
@@ -429,14 +426,6 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
         "beta_0). **Alg. 2 success**: the paper's re-planning loop, run by the core's "
         "`sixaxis_avoid.plan(learner=...)` for every learner (deep learners retrain from scratch "
         "per re-plan, within the suite's cap); the number of runs where it ran in brackets.",
-        *(
-            [
-                "- Some runs have no Algorithm 2 result: the core they ran with had no "
-                "`plan(learner=...)` (only the native learner's ran)."
-            ]
-            if any_alg2_missing
-            else []
-        ),
         "",
         "## How to run",
         "",

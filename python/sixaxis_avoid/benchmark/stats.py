@@ -173,7 +173,7 @@ def per_learner(runs: list[dict[str, Any]]) -> dict[str, Any]:
     firsts = [r for r in runs if r["result"]["first_success"] is not None]
     convs = [r for r in runs if r["result"]["convergence"] is not None]
     alg2 = [r["result"]["algorithm2"] for r in runs if r["result"].get("algorithm2")]
-    alg2_ok = [a for a in alg2 if a.get("available")]
+    alg2_ok = alg2
     alg1 = [r["result"].get("algorithm1") for r in runs if "algorithm1" in r["result"]]
     return {
         "runs": n,
