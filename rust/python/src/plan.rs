@@ -11,7 +11,7 @@ use sixaxis_core::replanning::{plan as core_plan, PlanOptions, PlanResult};
 use sixaxis_core::scenario::Bounds;
 use sixaxis_core::{Assist, Cell};
 
-use crate::convert::{cell, json_to_py, repr};
+use crate::convert::{cell, json_to_py, repr, uint_arg};
 use crate::errors::{invalid_argument, run};
 use crate::scenario::{scenario_from_any, PyScenario};
 
@@ -157,35 +157,6 @@ impl PyPlanResult {
             self.inner.wall_time_s
         )
     }
-}
-
-/// An integer keyword in `min..=max` (bools rejected), or `None` when absent.
-fn uint_arg(
-    py: Python<'_>,
-    name: &str,
-    obj: Option<&Bound<'_, PyAny>>,
-    min: u64,
-    max: u64,
-) -> PyResult<Option<u64>> {
-    let Some(o) = obj.filter(|o| !o.is_none()) else {
-        return Ok(None);
-    };
-    let bad = || {
-        let domain = if max == u64::MAX {
-            format!("must be an integer >= {min}")
-        } else {
-            format!("must be an integer in {min}..={max}")
-        };
-        invalid_argument(py, name, repr(o), domain)
-    };
-    if o.is_instance_of::<PyBool>() {
-        return Err(bad());
-    }
-    let v: i128 = o.extract().map_err(|_| bad())?;
-    if v < min as i128 || v > max as i128 {
-        return Err(bad());
-    }
-    Ok(Some(v as u64))
 }
 
 fn finite(py: Python<'_>, name: &str, v: f64) -> PyResult<f64> {

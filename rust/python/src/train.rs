@@ -9,7 +9,7 @@ use pyo3::types::PyTuple;
 use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable, TrainOptions};
 use sixaxis_core::{Cell, GridWorld, Scenario};
 
-use crate::convert::{cell, repr};
+use crate::convert::{cell, repr, uint_arg};
 use crate::errors::{invalid_argument, run, run_attached};
 use crate::scenario::{scenario_from_any, PyScenario};
 
@@ -198,25 +198,23 @@ fn q_from_array(
 pub fn train(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
-    episodes: Option<i64>,
-    seed: Option<i64>,
+    episodes: Option<&Bound<'_, PyAny>>,
+    seed: Option<&Bound<'_, PyAny>>,
     assist: Option<bool>,
-    max_steps_per_episode: Option<i64>,
+    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     extra_obstacles: Option<&Bound<'_, PyAny>>,
     initial_q: Option<PyReadonlyArray2<'_, f64>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
     let mut opts = TrainOptions::from_scenario(&s);
-    if let Some(e) = episodes {
-        opts.episodes = u32::try_from(e)
-            .ok()
-            .filter(|&e| e > 0)
-            .ok_or_else(|| invalid_argument(py, "episodes", e, "must be in 1..=4294967295"))?;
+    // Checked here, not by PyO3's `i64` extraction: a huge int gave an OverflowError that
+    // named no argument.
+    if let Some(e) = uint_arg(py, "episodes", episodes, 1, u32::MAX as u64)? {
+        opts.episodes = e as u32;
     }
-    if let Some(v) = seed {
-        opts.seed =
-            u64::try_from(v).map_err(|_| invalid_argument(py, "seed", v, "must be >= 0"))?;
+    if let Some(v) = uint_arg(py, "seed", seed, 0, u64::MAX)? {
+        opts.seed = v;
     }
     if let Some(a) = assist {
         opts.assist = if a {
@@ -225,10 +223,14 @@ pub fn train(
             sixaxis_core::Assist::off()
         };
     }
-    if let Some(m) = max_steps_per_episode {
-        opts.max_steps_per_episode = u32::try_from(m).ok().filter(|&m| m > 0).ok_or_else(|| {
-            invalid_argument(py, "max_steps_per_episode", m, "must be in 1..=4294967295")
-        })?;
+    if let Some(m) = uint_arg(
+        py,
+        "max_steps_per_episode",
+        max_steps_per_episode,
+        1,
+        u32::MAX as u64,
+    )? {
+        opts.max_steps_per_episode = m as u32;
     }
     let world = world_of(py, &s, extra_obstacles)?;
     let q0 = initial_q.map(|a| q_from_array(py, a, &world)).transpose()?;
