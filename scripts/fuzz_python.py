@@ -202,19 +202,29 @@ def set_at(d: Any, rng: random.Random, value: Any) -> str:
     return "<root>"
 
 
+TARGETS = [
+    "Scenario(dict)",
+    "Scenario.replace",
+    "Scenario(any)",
+    "Arm(dh)",
+    "Arm.fk",
+    "Arm.ik",
+    "env.step",
+    "EnvCore(extra_obstacles)",
+    "VecEnvCore.step",
+    "VecEnvCore.seed",
+]
+
+
 def run_one(rng: random.Random, base: dict) -> tuple[str, str]:
     """Run one input; returns (target, description)."""
     import copy
-
 
     import sixaxis_avoid as sa
     from sixaxis_avoid import _core
 
     desc, value = hostile(rng)
-    target = rng.choice(
-        ["Scenario(dict)", "Scenario.replace", "Arm(dh)", "Arm.fk", "Arm.ik", "env.step"]
-        + ["EnvCore(extra_obstacles)", "VecEnvCore.step", "VecEnvCore.seed", "Scenario(any)"]
-    )
+    target = rng.choice(TARGETS)
     if target == "Scenario(dict)":
         d = copy.deepcopy(base)
         where = set_at(d, rng, value)
@@ -312,14 +322,16 @@ def child(args: argparse.Namespace) -> None:
         _RUN.index = i
         rng = random.Random(f"{args.seed}:{i}")
         try:
-            target, desc = run_one(rng, base)
+            target, _desc = run_one(rng, base)
             outcomes[f"{target}: accepted"] += 1
         except (ValueError, TypeError) as e:
             outcomes[f"{_last(args.log)['target']}: {type(e).__name__}"] += 1
-        except BaseException as e:  # noqa: BLE001 - the point is to see every other kind
+        except BaseException as e:
             rec = _last(args.log)
             outcomes[f"{rec['target']}: {type(e).__name__}"] += 1
-            findings.append({**rec, "kind": "exception", "exception": f"{type(e).__name__}: {e}"[:300]})
+            findings.append(
+                {**rec, "kind": "exception", "exception": f"{type(e).__name__}: {e}"[:300]}
+            )
     with open(args.log + ".result", "w") as f:
         json.dump({"outcomes": outcomes, "findings": findings}, f)
 
