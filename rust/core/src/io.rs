@@ -15,8 +15,20 @@ use crate::error::{Error, Result};
 /// over `path`; then the directory is synced so that the rename itself survives a power
 /// cut. A reader, or a process killed at any moment (SIGKILL included), sees the old file or
 /// the new one, never a mix. On error the temporary file is removed and `path` is untouched.
+///
+/// An existing target that is not a regular file or a directory (`/dev/null`, `/dev/stdout`,
+/// a named pipe) is written in place: renaming over it would replace the device itself.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !meta.is_file() && !meta.is_dir() {
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(|e| Error::io(path, e))?;
+            return f.write_all(bytes).map_err(|e| Error::io(path, e));
+        }
+    }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => std::path::PathBuf::from("."),
@@ -117,6 +129,14 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a_directory")]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_device_is_written_in_place_not_replaced() {
+        write_atomic(Path::new("/dev/null"), b"discarded").unwrap();
+        let meta = std::fs::metadata("/dev/null").unwrap();
+        assert!(!meta.is_file(), "/dev/null must stay a device");
     }
 
     #[cfg(unix)]

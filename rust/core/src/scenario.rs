@@ -328,10 +328,20 @@ impl Scenario {
         Scenario::from_json(&text)
     }
 
-    /// Parse and validate scenario JSON.
+    /// Parse and validate scenario JSON. A parse error names the field at fault
+    /// (`field `learning.alpha`: invalid type: ...`).
     pub fn from_json(text: &str) -> Result<Scenario> {
-        let s: Scenario =
-            serde_json::from_str(text).map_err(|e| Error::ScenarioParse(e.to_string()))?;
+        let mut de = serde_json::Deserializer::from_str(text);
+        let s: Scenario = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let path = e.path().to_string();
+            if path == "." {
+                Error::ScenarioParse(e.into_inner().to_string())
+            } else {
+                Error::ScenarioParse(format!("field `{path}`: {}", e.into_inner()))
+            }
+        })?;
+        // Trailing text after the object is an error, as with `serde_json::from_str`.
+        de.end().map_err(|e| Error::ScenarioParse(e.to_string()))?;
         s.validate()?;
         Ok(s)
     }

@@ -81,8 +81,10 @@ fn random_value(rng: &mut ChaCha8Rng, depth: u32) -> Value {
             Value::from(extremes[rng.random_range(0..extremes.len())])
         }
         3 => Value::from(rng.random::<u64>()),
-        4 => serde_json::Number::from_f64(rng.random_range(-2.0..2.0) * 10f64.powi(rng.random_range(-8..8)))
-            .map_or(Value::Null, Value::Number),
+        4 => serde_json::Number::from_f64(
+            rng.random_range(-2.0..2.0) * 10f64.powi(rng.random_range(-8..8)),
+        )
+        .map_or(Value::Null, Value::Number),
         5 if depth < 4 => Value::Array(
             (0..rng.random_range(0..5))
                 .map(|_| random_value(rng, depth + 1))
@@ -94,7 +96,9 @@ fn random_value(rng: &mut ChaCha8Rng, depth: u32) -> Value {
                 .collect(),
         ),
         7 => Value::Bool(rng.random()),
-        8 => Value::String(["", "x", "centres", "capsules", "paper_simple"][rng.random_range(0..5)].into()),
+        8 => Value::String(
+            ["", "x", "centres", "capsules", "paper_simple"][rng.random_range(0..5)].into(),
+        ),
         _ => Value::Null,
     }
 }
@@ -184,7 +188,12 @@ fn check_scenario(text: &str) {
 }
 
 /// Run `n` inputs of `make_input` through `check`, catching panics; report the rate.
-fn fuzz(target: &str, n: u64, mut make_input: impl FnMut(&mut ChaCha8Rng) -> Vec<u8>, check: impl Fn(&[u8])) {
+fn fuzz(
+    target: &str,
+    n: u64,
+    mut make_input: impl FnMut(&mut ChaCha8Rng) -> Vec<u8>,
+    check: impl Fn(&[u8]),
+) {
     let seed = seed();
     let t0 = Instant::now();
     // The default hook would print every caught panic; failures are reported below.
@@ -313,7 +322,12 @@ fn named_hostile_inputs_are_errors() {
     let deep = format!("{}{}", "[".repeat(100_000), "]".repeat(100_000));
     assert!(Scenario::from_json(&deep).is_err());
     let world = GridWorld::new(&Scenario::builtin("paper_simple").unwrap()).unwrap();
-    for bytes in [&b""[..], b"SIXAXIS-QTABLE 1\n", b"SIXAXIS-QTABLE 1\n{}\n", b"\xff\xfe"] {
+    for bytes in [
+        &b""[..],
+        b"SIXAXIS-QTABLE 1\n",
+        b"SIXAXIS-QTABLE 1\n{}\n",
+        b"\xff\xfe",
+    ] {
         assert!(QTable::from_file_bytes(bytes, &world, Path::new("x")).is_err());
     }
     #[cfg(unix)]
@@ -323,4 +337,19 @@ fn named_hostile_inputs_are_errors() {
         let e = QTable::load(Path::new("/dev/zero"), &world).unwrap_err();
         assert!(e.to_string().contains("larger than"), "{e}");
     }
+}
+
+/// A parse error names the field at fault (serde_path_to_error), not just a line and column.
+#[test]
+fn parse_errors_name_the_field() {
+    let mut v = serde_json::to_value(Scenario::builtin("paper_simple").unwrap()).unwrap();
+    v["learning"]["alpha"] = Value::from("fast");
+    let e = Scenario::from_json(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("field `learning.alpha`"), "{e}");
+    let mut v = serde_json::to_value(Scenario::builtin("paper_simple").unwrap()).unwrap();
+    v["bounds"]["min"][1] = Value::from(1u64 << 40);
+    let e = Scenario::from_json(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("field `bounds.min[1]`"), "{e}");
+    let text = format!("{} trailing", Scenario::builtin("paper_simple").unwrap().to_json());
+    assert!(Scenario::from_json(&text).is_err());
 }
