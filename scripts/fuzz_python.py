@@ -122,7 +122,7 @@ def hostile(rng: random.Random) -> tuple[str, Any]:
         return f"self-referential {kind}", self_ref(kind)
     if k == 2:
         v = rng.choice([2**31, -(2**31) - 1, 2**63, -(2**63) - 1, 2**64, 10**100, -(10**5000)])
-        return f"int {str(v)[:12]}", v
+        return f"int of {v.bit_length()} bits, sign {(v > 0) - (v < 0)}", v
     if k == 3:
         v = rng.choice([float("nan"), float("inf"), -float("inf"), 1e308, -0.0, 5e-324])
         return f"float {v}", v
@@ -325,15 +325,21 @@ def child(args: argparse.Namespace) -> None:
             target, _desc = run_one(rng, base)
             outcomes[f"{target}: accepted"] += 1
         except (ValueError, TypeError) as e:
-            outcomes[f"{_last(args.log)['target']}: {type(e).__name__}"] += 1
-        except BaseException as e:
-            rec = _last(args.log)
+            outcomes[f"{_target_of(args.log, i)}: {type(e).__name__}"] += 1
+        except BaseException as e:  # every other kind is a finding
+            rec = {**_last(args.log), "target": _target_of(args.log, i)}
             outcomes[f"{rec['target']}: {type(e).__name__}"] += 1
             findings.append(
                 {**rec, "kind": "exception", "exception": f"{type(e).__name__}: {e}"[:300]}
             )
     with open(args.log + ".result", "w") as f:
         json.dump({"outcomes": outcomes, "findings": findings}, f)
+
+
+def _target_of(log: str, index: int) -> str:
+    """The target of input `index`, or "making the input" if it failed before its call."""
+    rec = _last(log)
+    return rec["target"] if rec["index"] == index else "making the input"
 
 
 def _last(log: str) -> dict:

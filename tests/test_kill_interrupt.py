@@ -65,6 +65,7 @@ def test_sigkill_during_out_write(sixaxis_bin, tmp_path):
     cmd = [str(sixaxis_bin), "train", "--scenario", "paper_simple", "--episodes", "3000"]
     cmd += ["--quiet", "--out", str(out)]
     counts = _kill_loop(cmd, [out], _json_ok)
+    print(f"SIGKILL rounds: {counts}")
     assert counts["old"] + counts["new"] == ROUNDS
 
 
@@ -78,6 +79,7 @@ def test_sigkill_during_qtable_save(sixaxis_bin, tmp_path):
         assert sa.load_q(p, scenario).shape[1] == 6
 
     counts = _kill_loop(cmd, [q], q_ok)
+    print(f"SIGKILL rounds: {counts}")
     assert counts["old"] + counts["new"] == ROUNDS
 
 
@@ -98,6 +100,7 @@ def test_sigkill_during_reproduce_outputs(sixaxis_bin, tmp_path):
             assert p.read_text().strip(), "empty report"
 
     counts = _kill_loop(cmd, [*jsons, report], ok)
+    print(f"SIGKILL rounds: {counts}")
     assert counts["old"] + counts["new"] == ROUNDS * (len(jsons) + 1)
 
 
