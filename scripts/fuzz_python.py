@@ -316,24 +316,23 @@ def child(args: argparse.Namespace) -> None:
 
     base = sa.Scenario().to_dict()
     _RUN = _Child(args.log)
-    outcomes: collections.Counter = collections.Counter()
-    findings = []
-    for i in range(args.start, args.start + args.count):
-        _RUN.index = i
-        rng = random.Random(f"{args.seed}:{i}")
-        try:
-            target, _desc = run_one(rng, base)
-            outcomes[f"{target}: accepted"] += 1
-        except (ValueError, TypeError) as e:
-            outcomes[f"{_target_of(args.log, i)}: {type(e).__name__}"] += 1
-        except BaseException as e:  # every other kind is a finding
-            rec = {**_last(args.log), "target": _target_of(args.log, i)}
-            outcomes[f"{rec['target']}: {type(e).__name__}"] += 1
-            findings.append(
-                {**rec, "kind": "exception", "exception": f"{type(e).__name__}: {e}"[:300]}
-            )
-    with open(args.log + ".result", "w") as f:
-        json.dump({"outcomes": outcomes, "findings": findings}, f)
+    # One line per finished input, appended at once: what ran before a crash still counts.
+    with open(args.log + ".jsonl", "a") as out:
+        for i in range(args.start, args.start + args.count):
+            _RUN.index = i
+            rng = random.Random(f"{args.seed}:{i}")
+            rec: dict = {}
+            try:
+                target, _desc = run_one(rng, base)
+                rec = {"outcome": f"{target}: accepted"}
+            except (ValueError, TypeError) as e:
+                rec = {"outcome": f"{_target_of(args.log, i)}: {type(e).__name__}"}
+            except BaseException as e:  # every other kind is a finding
+                found = {**_last(args.log), "target": _target_of(args.log, i)}
+                found.update(kind="exception", exception=f"{type(e).__name__}: {e}"[:300])
+                rec = {"outcome": f"{found['target']}: {type(e).__name__}", "finding": found}
+            out.write(json.dumps(rec) + "\n")
+            out.flush()
 
 
 def _target_of(log: str, index: int) -> str:
@@ -361,7 +360,7 @@ def parent(args: argparse.Namespace) -> int:
             n = min(args.chunk, end - start)
             cmd = [sys.executable, __file__, "--child", "--start", str(start), "--count", str(n)]
             cmd += ["--seed", str(args.seed), "--log", log]
-            for p in (log, log + ".result"):
+            for p in (log, log + ".jsonl"):
                 if os.path.exists(p):
                     os.remove(p)
             try:
@@ -369,11 +368,14 @@ def parent(args: argparse.Namespace) -> int:
                 rc = proc.returncode
             except subprocess.TimeoutExpired:
                 rc = None
-            if rc == 0 and os.path.exists(log + ".result"):
-                with open(log + ".result") as f:
-                    res = json.load(f)
-                outcomes.update(res["outcomes"])
-                findings += res["findings"]
+            if os.path.exists(log + ".jsonl"):
+                with open(log + ".jsonl") as f:
+                    for line in f:
+                        rec = json.loads(line)
+                        outcomes[rec["outcome"]] += 1
+                        if "finding" in rec:
+                            findings.append(rec["finding"])
+            if rc == 0:
                 start += n
                 continue
             rec = _last(log)

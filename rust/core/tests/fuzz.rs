@@ -350,6 +350,9 @@ fn parse_errors_name_the_field() {
     v["bounds"]["min"][1] = Value::from(1u64 << 40);
     let e = Scenario::from_json(&v.to_string()).unwrap_err().to_string();
     assert!(e.contains("field `bounds.min[1]`"), "{e}");
-    let text = format!("{} trailing", Scenario::builtin("paper_simple").unwrap().to_json());
+    let text = format!(
+        "{} trailing",
+        Scenario::builtin("paper_simple").unwrap().to_json()
+    );
     assert!(Scenario::from_json(&text).is_err());
 }

@@ -5,7 +5,7 @@
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyTuple};
+use pyo3::types::{PyDict, PyTuple};
 use sixaxis_core::generator::{generate, GeneratorOptions};
 use sixaxis_core::replanning::{plan as core_plan, PlanOptions, PlanResult};
 use sixaxis_core::scenario::Bounds;
