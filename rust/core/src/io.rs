@@ -154,4 +154,36 @@ mod tests {
         assert_eq!(read_bounded(&p, 5).unwrap(), b"12345");
         assert!(read_bounded(&p, 4).is_err());
     }
+
+    /// A reader polling the target while it is rewritten sees a whole old or a whole new
+    /// file, never a mix or a short one (a truncate-and-write fails this at once).
+    #[test]
+    fn a_concurrent_reader_never_sees_a_partial_file() {
+        use std::sync::atomic::AtomicBool;
+        use std::sync::Arc;
+        const N: usize = 1 << 20;
+        let dir = tempfile::tempdir().unwrap();
+        let p = Arc::new(dir.path().join("big.bin"));
+        write_atomic(&p, &vec![b'a'; N]).unwrap();
+        let done = Arc::new(AtomicBool::new(false));
+        let reader = {
+            let (p, done) = (Arc::clone(&p), Arc::clone(&done));
+            std::thread::spawn(move || {
+                let mut reads = 0u32;
+                while !done.load(Ordering::Relaxed) {
+                    let b = std::fs::read(&*p).unwrap();
+                    assert_eq!(b.len(), N, "a short file was visible");
+                    assert!(b.iter().all(|&x| x == b[0]), "a mixed file was visible");
+                    reads += 1;
+                }
+                reads
+            })
+        };
+        for i in 0..24 {
+            write_atomic(&p, &vec![if i % 2 == 0 { b'b' } else { b'a' }; N]).unwrap();
+        }
+        done.store(true, Ordering::Relaxed);
+        assert!(reader.join().unwrap() > 0);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
 }
