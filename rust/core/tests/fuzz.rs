@@ -172,10 +172,10 @@ fn mutate_bytes(bytes: &mut Vec<u8>, rng: &mut ChaCha8Rng) {
     }
 }
 
-/// What must hold for an accepted scenario.
-fn check_scenario(text: &str) {
+/// What must hold for an accepted scenario; whether it was accepted.
+fn check_scenario(text: &str) -> bool {
     let Ok(s) = Scenario::from_json(text) else {
-        return;
+        return false;
     };
     s.validate().expect("an accepted scenario validates");
     let again = Scenario::from_json(&s.to_json()).expect("an accepted scenario round trips");
@@ -185,14 +185,16 @@ fn check_scenario(text: &str) {
         assert_eq!(w.num_states(), s.bounds.volume());
         let _ = w.shortest_path();
     }
+    true
 }
 
-/// Run `n` inputs of `make_input` through `check`, catching panics; report the rate.
+/// Run `n` inputs of `make_input` through `check` (which says whether the parser accepted
+/// the input), catching panics; report the rate and how many inputs were accepted.
 fn fuzz(
     target: &str,
     n: u64,
     mut make_input: impl FnMut(&mut ChaCha8Rng) -> Vec<u8>,
-    check: impl Fn(&[u8]),
+    check: impl Fn(&[u8]) -> bool,
 ) {
     let seed = seed();
     let t0 = Instant::now();
@@ -200,17 +202,21 @@ fn fuzz(
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
     let mut failure = None;
+    let mut accepted = 0u64;
     for i in 0..n {
         let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i);
         let input = make_input(&mut rng);
-        if let Err(p) = catch_unwind(AssertUnwindSafe(|| check(&input))) {
-            let msg = p
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
-            failure = Some((i, msg, String::from_utf8_lossy(&input).into_owned()));
-            break;
+        match catch_unwind(AssertUnwindSafe(|| check(&input))) {
+            Ok(ok) => accepted += u64::from(ok),
+            Err(p) => {
+                let msg = p
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                failure = Some((i, msg, String::from_utf8_lossy(&input).into_owned()));
+                break;
+            }
         }
     }
     std::panic::set_hook(hook);
@@ -219,7 +225,7 @@ fn fuzz(
     }
     let secs = t0.elapsed().as_secs_f64();
     eprintln!(
-        "fuzz {target}: {n} inputs, no panic, {secs:.1} s ({:.0} inputs/s, seed {seed})",
+        "fuzz {target}: {n} inputs, {accepted} accepted, no panic, {secs:.1} s ({:.0} inputs/s, seed {seed})",
         n as f64 / secs.max(1e-9)
     );
 }
@@ -258,11 +264,7 @@ fn scenario_json_from_byte_mutations() {
             mutate_bytes(&mut b, rng);
             b
         },
-        |bytes| {
-            if let Ok(text) = std::str::from_utf8(bytes) {
-                check_scenario(text);
-            }
-        },
+        |bytes| std::str::from_utf8(bytes).is_ok_and(check_scenario),
     );
 }
 
@@ -299,10 +301,12 @@ fn qtable_bytes_from_mutations() {
             b
         },
         |bytes| {
-            if let Ok(q) = QTable::from_file_bytes(bytes, &simple, Path::new("fuzz.bin")) {
-                assert_eq!(q.num_states(), simple.num_states());
-                assert!(q.values().iter().all(|v| v.is_finite()));
-            }
+            let Ok(q) = QTable::from_file_bytes(bytes, &simple, Path::new("fuzz.bin")) else {
+                return false;
+            };
+            assert_eq!(q.num_states(), simple.num_states());
+            assert!(q.values().iter().all(|v| v.is_finite()));
+            true
         },
     );
 }
