@@ -311,7 +311,9 @@ actions = st.one_of(
     st.integers(),
     st.integers(-(2**80), 2**80),
     st.floats(),
-    st.tuples(st.sampled_from(NUMPY_SCALARS), st.integers(-3, 8)).map(lambda t: t[0](t[1])),
+    st.tuples(st.sampled_from(NUMPY_SCALARS), st.integers(-3, 8)).map(
+        lambda t: np.array(t[1]).astype(t[0])[()]  # wraps like a C cast: uint8(-1) = 255
+    ),
     st.integers(-2, 8).map(np.array),
     st.lists(st.integers(0, 5), max_size=3).map(np.array),
     hostile,

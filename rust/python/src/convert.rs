@@ -174,16 +174,19 @@ pub fn repr(obj: &Bound<'_, PyAny>) -> String {
 
 /// The items of a sequence, at most `max_items` of them: reads by iteration and never
 /// trusts `__len__` (PyO3's `Vec` extraction pre-allocates `len()` items, so a sequence
-/// claiming 2**40 items aborted the process on the failed allocation). Strings, bytes and
-/// mappings are refused: they iterate, but never as numbers or cells.
+/// claiming 2**40 items aborted the process on the failed allocation). What counts as a
+/// sequence is what PyO3's extraction accepted (`PySequence_Check`: lists, tuples, NumPy
+/// arrays, ...), less strings and bytes; sets, dicts and generators are refused.
 pub fn bounded_items<'py>(
     obj: &Bound<'py, PyAny>,
     max_items: usize,
 ) -> Option<Vec<Bound<'py, PyAny>>> {
-    if obj.is_instance_of::<PyString>()
+    // SAFETY: `obj` is a live object and the GIL is held (we have a `Bound`).
+    let is_sequence = unsafe { pyo3::ffi::PySequence_Check(obj.as_ptr()) } != 0;
+    if !is_sequence
+        || obj.is_instance_of::<PyString>()
         || obj.is_instance_of::<PyBytes>()
         || obj.is_instance_of::<PyByteArray>()
-        || obj.is_instance_of::<PyDict>()
     {
         return None;
     }
