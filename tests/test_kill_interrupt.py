@@ -17,7 +17,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 import sixaxis_avoid as sa
 
 ROUNDS = int(os.environ.get("KILL_ROUNDS", "12"))
