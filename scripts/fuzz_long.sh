@@ -15,7 +15,7 @@ echo "== Rust: $INPUTS inputs per target, seed $SEED"
 SIXAXIS_FUZZ_INPUTS=$INPUTS SIXAXIS_FUZZ_SEED=$SEED \
   CARGO_PROFILE_RELEASE_OVERFLOW_CHECKS=true CARGO_TARGET_DIR=target/fuzz-long \
   cargo test --release -p sixaxis-core --test fuzz -- --nocapture --test-threads 1 2>&1 \
-  | tee fuzz-results/rust.log | grep -E "^fuzz |test result|panicked"
+  | tee fuzz-results/rust.log | grep -oE "fuzz [A-Za-z].*\)|test result.*|panicked.*"
 if [ "$PY_INPUTS" -gt 0 ]; then
   echo "== Python boundary fuzzer: $PY_INPUTS inputs, seed $SEED"
   # shellcheck disable=SC1091
