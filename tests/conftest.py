@@ -7,10 +7,20 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-import sixaxis_avoid
+# Hypothesis profiles: "ci" (few examples, the CI run; chosen when the CI variable is set),
+# "dev" (the default), "long" (a thorough local run). HYPOTHESIS_PROFILE overrides:
+#   HYPOTHESIS_PROFILE=long python -m pytest tests/test_hardening.py -q
+_COMMON = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
+settings.register_profile("ci", max_examples=25, derandomize=True, **_COMMON)
+settings.register_profile("dev", max_examples=100, **_COMMON)
+settings.register_profile("long", max_examples=3000, **_COMMON)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "dev"))
+
+import sixaxis_avoid  # noqa: E402
 
 
 @pytest.fixture(scope="session")

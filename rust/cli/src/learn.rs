@@ -159,7 +159,7 @@ pub fn run_train(a: &TrainArgs) -> Result<Value, Failure> {
     let r = train(&world, &opts, initial, Some(&tick))?;
     pb.finish_and_clear();
     if let Some(p) = &a.q_out {
-        r.q.save(p, &world)?;
+        crate::interrupt::writing(|| r.q.save(p, &world))?;
     }
     Ok(train_json(&s, &world, &opts, &r, !a.no_curve))
 }

@@ -2,7 +2,8 @@
 //! paper's experiments, with JSON on stdout or to `--out FILE` (written atomically).
 //!
 //! Errors go to stderr with exit code 2 (bad input) or 1 (a run that failed), never a
-//! panic backtrace.
+//! panic backtrace. Ctrl-C exits with 130 at once, never inside an output write
+//! (`interrupt`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -12,6 +13,7 @@ use serde_json::{json, Value};
 use sixaxis_core::kinematics::{rotation_from_rpy_deg, Arm};
 use sixaxis_core::{Error, Scenario, TerminalPose};
 
+mod interrupt;
 mod learn;
 mod list;
 mod progress;
@@ -174,10 +176,13 @@ fn arm_of(scenario: &Option<String>) -> Result<Arm, Failure> {
 
 fn emit(value: &Value, out: &OutArgs) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value).expect("JSON values always serialise") + "\n";
-    match &out.out {
-        Some(path) => sixaxis_core::io::write_atomic(path, text.as_bytes())?,
-        None => print!("{text}"),
-    }
+    interrupt::writing(|| match &out.out {
+        Some(path) => sixaxis_core::io::write_atomic(path, text.as_bytes()),
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    })?;
     Ok(())
 }
 
@@ -318,6 +323,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    interrupt::install();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(e)) => {

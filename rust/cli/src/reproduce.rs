@@ -311,7 +311,7 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
     std::fs::create_dir_all(&a.out_dir).map_err(|e| Error::io(&a.out_dir, e))?;
     let json_path = a.out_dir.join("reproduction.json");
     let text = serde_json::to_string(&result).expect("JSON values serialise");
-    sixaxis_core::io::write_atomic(&json_path, text.as_bytes())?;
+    crate::interrupt::writing(|| sixaxis_core::io::write_atomic(&json_path, text.as_bytes()))?;
     let figures = if a.no_figures {
         None
     } else {
@@ -323,7 +323,7 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
     }
-    sixaxis_core::io::write_atomic(&a.report, report.as_bytes())?;
+    crate::interrupt::writing(|| sixaxis_core::io::write_atomic(&a.report, report.as_bytes()))?;
     Ok(json!({
         "results": json_path,
         "report": a.report,

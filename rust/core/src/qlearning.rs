@@ -350,7 +350,17 @@ impl QTable {
     /// Read a table written by [`QTable::save`] and check it fits `world`
     /// ([`Error::QTableMismatch`] if bounds, target or blocked cells differ).
     pub fn load(path: &Path, world: &GridWorld) -> Result<QTable> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        // A table of `world` is its values plus a header of a few hundred bytes: reading no
+        // more than that keeps `/dev/zero` or a huge stray file from exhausting memory.
+        let max_bytes = (world.num_states() * NUM_ACTIONS * 8 + MAX_HEADER_BYTES) as u64;
+        let bytes = crate::io::read_bounded(path, max_bytes)?;
+        QTable::from_file_bytes(&bytes, world, path)
+    }
+
+    /// Parse the bytes of a Q-table file (as [`QTable::save`] writes them) and check they
+    /// fit `world`; `path` only names the source in errors. Every malformed input (truncated,
+    /// bit-flipped, another world's) is an error, never a panic.
+    pub fn from_file_bytes(bytes: &[u8], world: &GridWorld, path: &Path) -> Result<QTable> {
         let bad = |why: String| {
             Error::io(
                 path,
@@ -423,15 +433,25 @@ impl QTable {
         if format!("{:016x}", ck.finish()) != header.values_checksum {
             return Err(bad("Q-table values fail their checksum".to_string()));
         }
-        let values = body
+        let values: Vec<f64> = body
             .chunks_exact(8)
             .map(|c| f64::from_le_bytes(c.try_into().expect("chunks of eight")))
             .collect();
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(bad(format!(
+                "Q-table value {i} (state {}, action {}) is {}, not a finite number",
+                i / NUM_ACTIONS,
+                i % NUM_ACTIONS,
+                values[i]
+            )));
+        }
         QTable::from_values(header.num_states, values)
     }
 }
 
 const MAGIC: &str = "SIXAXIS-QTABLE 1";
+/// Bound on a Q-table file's magic line and JSON header, bytes.
+const MAX_HEADER_BYTES: usize = 64 * 1024;
 const FORMAT_NAME: &str = "sixaxis-qtable";
 const FORMAT_VERSION: u32 = 1;
 

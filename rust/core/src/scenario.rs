@@ -35,6 +35,10 @@ use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
 /// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.
 pub type Cell = [i32; 3];
 
+/// Largest scenario file [`Scenario::from_file`] reads, bytes (256 MiB: some 16 million
+/// obstacle cells, the most a grid may hold).
+pub const MAX_SCENARIO_BYTES: u64 = 256 << 20;
+
 /// Position of the centre of cell `c` in a grid of `cell_mm` mm cells, mm (the one place
 /// that says where a cell is).
 pub fn cell_centre_mm(c: Cell, cell_mm: f64) -> nalgebra::Vector3<f64> {
@@ -71,14 +75,19 @@ impl Bounds {
         (0..3).all(|i| c[i] >= self.min[i] && c[i] <= self.max[i])
     }
 
-    /// Number of cells along each axis.
+    /// Number of cells along each axis (in i64: `max - min + 1` overflows i32 for the
+    /// widest boxes).
     pub fn size(&self) -> [usize; 3] {
-        [0, 1, 2].map(|i| (self.max[i] - self.min[i] + 1).max(0) as usize)
+        [0, 1, 2].map(|i| (self.max[i] as i64 - self.min[i] as i64 + 1).max(0) as usize)
     }
 
-    /// Number of cells in the box.
+    /// Number of cells in the box, saturating at `usize::MAX` (a wrapped product let a box
+    /// of 2^64 cells pass validation as an empty one).
     pub fn volume(&self) -> usize {
-        self.size().iter().product()
+        self.size()
+            .iter()
+            .try_fold(1usize, |acc, &n| acc.checked_mul(n))
+            .unwrap_or(usize::MAX)
     }
 }
 
@@ -498,16 +507,33 @@ impl Scenario {
         }
     }
 
-    /// Read and validate a scenario file.
+    /// Read and validate a scenario file (at most [`MAX_SCENARIO_BYTES`]: `/dev/zero` or an
+    /// endless pipe gives an error, not an exhausted memory).
     pub fn from_file(path: &Path) -> Result<Scenario> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::io::read_bounded(path, MAX_SCENARIO_BYTES)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+            )
+        })?;
         Scenario::from_json(&text)
     }
 
-    /// Parse and validate scenario JSON.
+    /// Parse and validate scenario JSON. A parse error names the field at fault
+    /// (`field `learning.alpha`: invalid type: ...`).
     pub fn from_json(text: &str) -> Result<Scenario> {
-        let mut s: Scenario =
-            serde_json::from_str(text).map_err(|e| Error::ScenarioParse(e.to_string()))?;
+        let mut de = serde_json::Deserializer::from_str(text);
+        let mut s: Scenario = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let path = e.path().to_string();
+            if path == "." {
+                Error::ScenarioParse(e.into_inner().to_string())
+            } else {
+                Error::ScenarioParse(format!("field `{path}`: {}", e.into_inner()))
+            }
+        })?;
+        // Trailing text after the object is an error, as with `serde_json::from_str`.
+        de.end().map_err(|e| Error::ScenarioParse(e.to_string()))?;
         s.fill_distances_from_mm()?;
         s.validate()?;
         Ok(s)

@@ -7,7 +7,7 @@ use sixaxis_core::ik::IK_ROTATION_INPUT_TOL;
 use sixaxis_core::kinematics::{rotation_from_rpy_deg, DhRow, PAPER_DH};
 use sixaxis_core::{Arm, TerminalPose};
 
-use crate::convert::{joints6, repr, vec3};
+use crate::convert::{bounded_rows, joints6, repr, vec3};
 use crate::errors::invalid_argument;
 use crate::scenario::scenario_from_any;
 
@@ -45,7 +45,7 @@ impl PyArm {
                 inner: Arm::paper(),
             });
         };
-        let rows: Vec<Vec<f64>> = dh.extract().map_err(|_| {
+        let rows: Vec<Vec<f64>> = bounded_rows(dh, 7, 5).ok_or_else(|| {
             invalid_argument(
                 py,
                 "dh",
@@ -172,7 +172,7 @@ impl PyArm {
             rpy_deg.filter(|r| !r.is_none()),
         ) {
             (Some(r), None) => {
-                let rows: Vec<Vec<f64>> = r.extract().map_err(|_| {
+                let rows: Vec<Vec<f64>> = bounded_rows(r, 4, 4).ok_or_else(|| {
                     invalid_argument(py, "rotation", repr(r), "must be a 3x3 matrix")
                 })?;
                 if rows.len() != 3 || rows.iter().any(|row| row.len() != 3) {

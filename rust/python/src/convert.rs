@@ -2,15 +2,35 @@
 //! argument or field at fault.
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::{
+    PyBool, PyByteArray, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple,
+};
 use serde_json::{Map, Number, Value};
 use sixaxis_core::{Cell, Error};
 
 use crate::errors::invalid_argument;
 
+/// Deepest nesting of containers [`py_to_json`] reads. The scenario schema nests 4 deep;
+/// serde_json's own parser stops at 128. Without a limit a self-referential dict, a
+/// 100 000-deep list or an object whose `tolist()` returns another such object recursed
+/// until the native stack overflowed and the interpreter died with SIGSEGV.
+pub const MAX_JSON_DEPTH: usize = 64;
+
 /// Python object -> JSON value; `path` is the dotted field name used in errors.
-/// Non-finite floats are rejected here (JSON has no NaN) with an error naming the field.
+/// Non-finite floats are rejected here (JSON has no NaN) with an error naming the field;
+/// containers nested deeper than [`MAX_JSON_DEPTH`] (self-references included) likewise.
 pub fn py_to_json(obj: &Bound<'_, PyAny>, path: &str) -> Result<Value, Error> {
+    py_to_json_at(obj, path, 0)
+}
+
+fn py_to_json_at(obj: &Bound<'_, PyAny>, path: &str, depth: usize) -> Result<Value, Error> {
+    if depth > MAX_JSON_DEPTH {
+        let shown: String = path.chars().take(60).collect();
+        return Err(Error::ScenarioParse(format!(
+            "field `{shown}...`: nested more than {MAX_JSON_DEPTH} levels deep (a container that contains itself?)"
+        )));
+    }
+    let py_to_json = |o: &Bound<'_, PyAny>, p: &str| py_to_json_at(o, p, depth + 1);
     let field = |p: &str| {
         if p.is_empty() {
             "<root>".to_string()
@@ -136,11 +156,59 @@ fn parse_err(path: &str, obj: &Bound<'_, PyAny>) -> Error {
     ))
 }
 
-/// `repr(obj)` or a placeholder.
+/// Longest `repr` quoted in an error message, in characters.
+const MAX_REPR_CHARS: usize = 200;
+
+/// `repr(obj)` (cut to 200 characters), or a placeholder when `repr` itself fails (a
+/// huge int beyond Python's digit limit, a deeply nested list, a raising `__repr__`).
 pub fn repr(obj: &Bound<'_, PyAny>) -> String {
-    obj.repr()
-        .map(|r| r.to_string())
-        .unwrap_or_else(|_| "<unrepresentable>".to_string())
+    let Ok(r) = obj.repr() else {
+        return "<unrepresentable>".to_string();
+    };
+    let r = r.to_string_lossy();
+    match r.char_indices().nth(MAX_REPR_CHARS) {
+        Some((cut, _)) => format!("{}...", &r[..cut]),
+        None => r.into_owned(),
+    }
+}
+
+/// The items of a sequence, at most `max_items` of them: reads by iteration and never
+/// trusts `__len__` (PyO3's `Vec` extraction pre-allocates `len()` items, so a sequence
+/// claiming 2**40 items aborted the process on the failed allocation). What counts as a
+/// sequence is what PyO3's extraction accepted (`PySequence_Check`: lists, tuples, NumPy
+/// arrays, ...), less strings and bytes; sets, dicts and generators are refused.
+pub fn bounded_items<'py>(
+    obj: &Bound<'py, PyAny>,
+    max_items: usize,
+) -> Option<Vec<Bound<'py, PyAny>>> {
+    // SAFETY: `obj` is a live object and the GIL is held (we have a `Bound`).
+    let is_sequence = unsafe { pyo3::ffi::PySequence_Check(obj.as_ptr()) } != 0;
+    if !is_sequence
+        || obj.is_instance_of::<PyString>()
+        || obj.is_instance_of::<PyBytes>()
+        || obj.is_instance_of::<PyByteArray>()
+    {
+        return None;
+    }
+    let mut out = Vec::new();
+    for item in obj.try_iter().ok()? {
+        if out.len() == max_items {
+            return None;
+        }
+        out.push(item.ok()?);
+    }
+    Some(out)
+}
+
+/// A sequence of at most `max_items` values each extracted as `T`, or `None`.
+pub fn bounded_vec<'py, T: FromPyObject<'py>>(
+    obj: &Bound<'py, PyAny>,
+    max_items: usize,
+) -> Option<Vec<T>> {
+    bounded_items(obj, max_items)?
+        .iter()
+        .map(|x| x.extract().ok())
+        .collect()
 }
 
 /// JSON value -> Python object (dicts, lists, str, int, float, bool, None).
@@ -178,7 +246,7 @@ pub fn json_to_py<'py>(py: Python<'py>, v: &Value) -> PyResult<Bound<'py, PyAny>
 /// `N` finite numbers from any sequence; the error names `name` and the value.
 pub fn finite_array<const N: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; N]> {
     let py = obj.py();
-    let v: Vec<f64> = obj.extract().map_err(|_| {
+    let v: Vec<f64> = bounded_vec(obj, N + 1).ok_or_else(|| {
         invalid_argument(
             py,
             name,
@@ -205,6 +273,19 @@ pub fn finite_array<const N: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyRes
     Ok(arr)
 }
 
+/// A table of at most `max_rows` rows of at most `max_cols` numbers each (a D-H table, a
+/// rotation matrix), or `None`; shapes are checked by the caller, values are not.
+pub fn bounded_rows(
+    obj: &Bound<'_, PyAny>,
+    max_rows: usize,
+    max_cols: usize,
+) -> Option<Vec<Vec<f64>>> {
+    bounded_items(obj, max_rows)?
+        .iter()
+        .map(|row| bounded_vec(row, max_cols))
+        .collect()
+}
+
 /// Six finite joint angles from any sequence of numbers.
 pub fn joints6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 6]> {
     finite_array::<6>(obj, name)
@@ -214,6 +295,9 @@ pub fn joints6(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 6]> {
 pub fn vec3(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; 3]> {
     finite_array::<3>(obj, name)
 }
+
+/// Most cells a list of cells may hold: the most cells a scenario's bounds may hold.
+pub const MAX_CELLS: usize = 1 << 24;
 
 /// A list of grid cells from any iterable of cells; `None` gives an empty list.
 pub fn cells(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<Cell>> {
@@ -226,6 +310,14 @@ pub fn cells(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<Cell>> 
         .try_iter()
         .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of cells"))?
     {
+        if out.len() == MAX_CELLS {
+            return Err(invalid_argument(
+                py,
+                name,
+                repr(obj),
+                format!("more than {MAX_CELLS} cells (an endless iterator?)"),
+            ));
+        }
         out.push(cell(&item?, name)?);
     }
     Ok(out)
@@ -234,9 +326,8 @@ pub fn cells(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Vec<Cell>> 
 /// A grid cell from any sequence of 3 integers.
 pub fn cell(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Cell> {
     let py = obj.py();
-    let v: Vec<i64> = obj
-        .extract()
-        .map_err(|_| invalid_argument(py, name, repr(obj), "must be a sequence of 3 integers"))?;
+    let v: Vec<i64> = bounded_vec(obj, 4)
+        .ok_or_else(|| invalid_argument(py, name, repr(obj), "must be a sequence of 3 integers"))?;
     if v.len() != 3 {
         return Err(invalid_argument(
             py,

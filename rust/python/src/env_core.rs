@@ -13,7 +13,7 @@ use sixaxis_core::env::{
 use sixaxis_core::grid::Assist;
 use sixaxis_core::{Cell, Scenario};
 
-use crate::convert::{cell, repr};
+use crate::convert::{bounded_vec, cell, repr};
 use crate::errors::{invalid_argument, run, run_attached};
 use crate::scenario::{scenario_from_any, PyScenario};
 
@@ -434,7 +434,15 @@ impl PyVecEnvCore {
     }
 
     /// Seed each env's generator of random targets (one seed per env).
-    fn seed(&mut self, py: Python<'_>, seeds: Vec<u64>) -> PyResult<()> {
+    fn seed(&mut self, py: Python<'_>, seeds: &Bound<'_, PyAny>) -> PyResult<()> {
+        let seeds: Vec<u64> = bounded_vec(seeds, self.batch.len() + 1).ok_or_else(|| {
+            invalid_argument(
+                py,
+                "seed",
+                repr(seeds),
+                format!("must be {} integers in 0..2**64", self.batch.len()),
+            )
+        })?;
         run_attached(py, || self.batch.seed(&seeds))
     }
 

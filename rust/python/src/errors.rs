@@ -79,7 +79,7 @@ exc!(
 exc!(
     IO_ERROR,
     "SixAxisIOError",
-    "Reading or writing a file failed (also an OSError: errno, strerror, filename are set)."
+    "Reading or writing a file failed (also an OSError; errno, strerror and filename are set when the OS gave an errno)."
 );
 exc!(
     INTERNAL_ERROR,
@@ -208,7 +208,10 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
             let filename = path.display().to_string();
             match source.raw_os_error() {
                 Some(errno) => build(py, &IO_ERROR, (errno, msg, filename), &[]),
-                None => build(py, &IO_ERROR, (msg,), &[("filename", s(py, &filename))]),
+                // No errno (bad data, a file too large): setting `filename` would make
+                // OSError print "[Errno None] None: 'path'" and hide the message, which
+                // names the path already.
+                None => build(py, &IO_ERROR, (msg,), &[]),
             }
         }
     }

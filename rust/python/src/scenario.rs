@@ -52,7 +52,7 @@ pub fn scenario_from_any(
         return run_attached(py, || Scenario::load(&name)).map(Arc::new);
     }
     if obj.hasattr("__fspath__").unwrap_or(false) {
-        let p: String = obj.call_method0("__fspath__")?.extract()?;
+        let p = fspath(obj, "scenario")?;
         return run_attached(py, || Scenario::load(&p)).map(Arc::new);
     }
     if obj.hasattr("keys").unwrap_or(false) {
@@ -64,6 +64,20 @@ pub fn scenario_from_any(
         repr(obj),
         "must be a Scenario, a built-in name, a path to a JSON file, a dict, or None",
     ))
+}
+
+/// `os.fspath(obj)` as a `str`; a bytes path or a non-str result is an error naming `name`
+/// (an exception raised by `__fspath__` itself propagates).
+fn fspath(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
+    let p = obj.call_method0("__fspath__")?;
+    p.extract().map_err(|_| {
+        invalid_argument(
+            obj.py(),
+            name,
+            repr(obj),
+            format!("its __fspath__() gave {}, not a str path", repr(&p)),
+        )
+    })
 }
 
 fn from_dict_inner(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
@@ -98,7 +112,7 @@ impl PyScenario {
     #[staticmethod]
     fn load(py: Python<'_>, name_or_path: &Bound<'_, PyAny>) -> PyResult<Self> {
         let name: String = if name_or_path.hasattr("__fspath__").unwrap_or(false) {
-            name_or_path.call_method0("__fspath__")?.extract()?
+            fspath(name_or_path, "name_or_path")?
         } else {
             name_or_path.extract().map_err(|_| {
                 invalid_argument(
