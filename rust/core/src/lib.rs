@@ -15,6 +15,7 @@
 //! - [`planner`] — pose planning over a terminal path (Algorithm 1).
 //! - [`replanning`] — the integrated loop with re-planning (Algorithm 2).
 //! - [`generator`] — random cluttered scenarios for benchmarks.
+//! - [`export`] — the arm as URDF, the arm and its world as a MuJoCo MJCF scene.
 //! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type; [`io`] — atomic file output.
 //!
@@ -33,6 +34,7 @@
 pub mod clearance;
 pub mod env;
 pub mod error;
+pub mod export;
 pub mod generator;
 pub mod grid;
 pub mod ik;
