@@ -328,7 +328,7 @@ pub fn mjcf(s: &Scenario) -> String {
     out += &header_comment(s, "The scene");
     let _ = write!(
         out,
-        "<mujoco model=\"sixaxis_{}\">\n  <compiler angle=\"radian\" autolimits=\"true\"/>\n  \
+        "<mujoco model=\"sixaxis_{}\">\n  <compiler angle=\"radian\" autolimits=\"true\" boundmass=\"1e-6\" boundinertia=\"1e-9\"/>\n  \
          <option gravity=\"0 0 0\"/>\n  <visual>\n    <global offwidth=\"1280\" offheight=\"960\"/>\n  </visual>\n  \
          <default>\n    <default class=\"arm\">\n      <geom size=\"{}\" contype=\"1\" conaffinity=\"2\" \
          rgba=\"0.25 0.45 0.8 1\"/>\n    </default>\n    <default class=\"obstacle\">\n      \
