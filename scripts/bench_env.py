@@ -130,10 +130,15 @@ def main() -> None:
         print(json.dumps(row), file=sys.stderr)
         vec.append(row)
     out["vector"] = vec
+    emit_json(out, args.out)
+
+
+def emit_json(out: dict, path: str | None) -> None:
+    """Print the results as JSON, and write them to ``path`` too when given."""
     text = json.dumps(out, indent=2)
     print(text)
-    if args.out:
-        with open(args.out, "w") as f:
+    if path:
+        with open(path, "w") as f:
             f.write(text + "\n")
 
 

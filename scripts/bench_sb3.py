@@ -28,6 +28,7 @@ import gymnasium as gym
 import numpy as np
 import sixaxis_avoid
 import stable_baselines3
+from bench_env import emit_json  # scripts/ is on sys.path when this script runs
 from sixaxis_avoid.sb3 import SixAxisVecEnv
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
@@ -136,11 +137,7 @@ def main() -> None:
     print(json.dumps({"ppo": ppo}), file=sys.stderr)
     out["ppo"] = {"num_envs": args.ppo_envs, **ppo}
     out["system"]["load_average_at_end"] = os.getloadavg()[0]
-    text = json.dumps(out, indent=2)
-    print(text)
-    if args.out:
-        with open(args.out, "w") as f:
-            f.write(text + "\n")
+    emit_json(out, args.out)
 
 
 if __name__ == "__main__":

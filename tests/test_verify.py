@@ -11,26 +11,19 @@ import sixaxis_avoid
 from sixaxis_avoid import verify
 
 
-@pytest.fixture(scope="module")
-def simple_plan():
-    p = sixaxis_avoid.plan("paper_simple", seed=0)
-    assert p.success
-    return p
-
-
-def test_paper_simple_plan_passes_eq11_but_its_centre_line_grazes_a_cube(simple_plan):
-    r = sixaxis_avoid.verify_plan(simple_plan, "paper_simple")
-    assert len(r.moves) == len(simple_plan.path) - 1
+def test_paper_paper_simple_plan_passes_eq11_but_its_centre_line_grazes_a_cube(paper_simple_plan):
+    r = sixaxis_avoid.verify_plan(paper_simple_plan, "paper_simple")
+    assert len(r.moves) == len(paper_simple_plan.path) - 1
     assert r.link_radius_mm == 30.0  # the export's default
     # Eq. 11 as the planner checked it: every step clears d_p.
-    assert r.eq11_cells > simple_plan.arm_safe_distance
+    assert r.eq11_cells > paper_simple_plan.arm_safe_distance
     # The real geometry: the centre line comes within a millimetre of a cube, so the 30 mm
     # capsules overlap it and MuJoCo reports contacts.
     assert 0.0 < r.centre_line_mm < 1.0
     assert r.min_distance_mm == pytest.approx(r.centre_line_mm - 30.0)
     assert r.contacts > 0
     last = r.moves[-1]
-    assert last.to_cell == tuple(simple_plan.target) and last.contact_steps
+    assert last.to_cell == tuple(paper_simple_plan.target) and last.contact_steps
 
 
 def test_a_capsules_plan_has_no_contact_in_mujoco():
@@ -54,7 +47,7 @@ def test_interpolation_matches_the_planner():
     np.testing.assert_allclose(np.diff(np.unwrap(qs[:, 0])), 0.2 * np.pi / 4)  # across +-pi
 
 
-def test_cli_plan_json_gives_the_same_report(simple_plan, sixaxis_bin, tmp_path):
+def test_cli_plan_json_gives_the_same_report(paper_simple_plan, sixaxis_bin, tmp_path):
     plan_json = tmp_path / "plan.json"
     subprocess.run(
         [
@@ -72,7 +65,7 @@ def test_cli_plan_json_gives_the_same_report(simple_plan, sixaxis_bin, tmp_path)
     out = tmp_path / "report.json"
     verify.main(["--plan", str(plan_json), "--scenario", "paper_simple", "--json", str(out)])
     from_cli = json.loads(out.read_text())
-    direct = verify.verify_plan(simple_plan, "paper_simple").to_dict()
+    direct = verify.verify_plan(paper_simple_plan, "paper_simple").to_dict()
     assert from_cli["min_distance_mm"] == pytest.approx(direct["min_distance_mm"], abs=1e-9)
     assert [m["contact_steps"] for m in from_cli["moves"]] == [
         m["contact_steps"] for m in direct["moves"]

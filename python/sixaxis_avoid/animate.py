@@ -16,7 +16,6 @@ Command line::
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 from collections.abc import Sequence
@@ -28,7 +27,7 @@ import numpy as np
 from sixaxis_avoid import _core
 from sixaxis_avoid._checks import check_choice, check_positive_int, invalid
 from sixaxis_avoid._deps import require
-from sixaxis_avoid.verify import _plan_dict, interpolate
+from sixaxis_avoid.verify import _plan_dict, interpolate, plan_argument_parser, plan_of_args
 
 RENDERERS = ("numpy", "mujoco")
 
@@ -150,14 +149,7 @@ def animate_plan(
 
 
 def main(argv: list[str] | None = None) -> int:
-    import json
-
-    ap = argparse.ArgumentParser(
-        prog="python -m sixaxis_avoid.animate", description=__doc__.split("\n\n")[0]
-    )
-    ap.add_argument("--scenario", default=None, help="scenario name or file (default: paper's)")
-    ap.add_argument("--plan", default=None, help="a plan JSON (sixaxis plan --out); else plan now")
-    ap.add_argument("--seed", type=int, default=0, help="seed of the plan made here")
+    ap = plan_argument_parser("python -m sixaxis_avoid.animate", __doc__)
     ap.add_argument("--out", required=True, help="the .gif or .mp4 to write")
     ap.add_argument("--fps", type=int, default=20)
     ap.add_argument("--frames-per-move", type=int, default=10)
@@ -165,14 +157,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--renderer", choices=RENDERERS, default="numpy")
     args = ap.parse_args(argv)
     s = _core.Scenario(args.scenario)
-    if args.plan:
-        with open(args.plan) as f:
-            plan: Any = json.load(f)
-    else:
-        plan = _core.plan(s, seed=args.seed)
-        if not plan.success:
-            print(f"no plan to animate: {plan.failure}", file=sys.stderr)
-            return 1
+    plan = plan_of_args(args, s)
+    if _plan_dict(plan).get("success") is False:
+        print(f"no plan to animate: {_plan_dict(plan).get('failure')}", file=sys.stderr)
+        return 1
     out = animate_plan(
         plan,
         args.out,

@@ -248,13 +248,25 @@ def markdown(rows: list[dict[str, Any]], radius_mm: float = TABLE_LINK_RADIUS_MM
     return head + "\n".join(lines) + "\n"
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(
-        prog="python -m sixaxis_avoid.verify", description=__doc__.split("\n\n")[0]
-    )
+def plan_argument_parser(prog: str, doc: str) -> argparse.ArgumentParser:
+    """A parser with the plan options shared by the verify and animate command lines."""
+    ap = argparse.ArgumentParser(prog=prog, description=doc.split("\n\n")[0])
     ap.add_argument("--scenario", default=None, help="scenario name or file (default: paper's)")
     ap.add_argument("--plan", default=None, help="a plan JSON (sixaxis plan --out); else plan now")
     ap.add_argument("--seed", type=int, default=0, help="seed of the plan made here")
+    return ap
+
+
+def plan_of_args(args: argparse.Namespace, s: _core.Scenario) -> Any:
+    """The plan of ``--plan`` (its JSON), or a new plan of ``s`` with ``--seed``."""
+    if args.plan:
+        with open(args.plan) as f:
+            return json.load(f)
+    return _core.plan(s, seed=args.seed)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = plan_argument_parser("python -m sixaxis_avoid.verify", __doc__)
     ap.add_argument("--link-radius-mm", type=float, default=None, help="capsule radius, mm")
     ap.add_argument("--table", action="store_true", help="every shipped scenario, both models")
     ap.add_argument("--json", default=None, help="write the report as JSON here")
@@ -265,11 +277,10 @@ def main(argv: list[str] | None = None) -> int:
         out: Any = rows
     else:
         s = _core.Scenario(args.scenario)
-        if args.plan:
-            with open(args.plan) as f:
-                plan: Any = json.load(f)
-        else:
-            plan = _core.plan(s, seed=args.seed)
+        plan = plan_of_args(args, s)
+        if _plan_dict(plan).get("success") is False:
+            print(f"no plan to verify: {_plan_dict(plan).get('failure')}", file=sys.stderr)
+            return 1
         report = verify_plan(plan, s, link_radius_mm=args.link_radius_mm)
         print(f"capsule radius {report.link_radius_mm:g} mm, t = {report.interpolation_steps}")
         print("move  from -> to          eq11(cells)  centre line(mm)  capsule(mm)  contacts")
