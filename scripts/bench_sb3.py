@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import sys
 import time
 
@@ -28,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 import sixaxis_avoid
 import stable_baselines3
-from bench_env import emit_json  # scripts/ is on sys.path when this script runs
+from bench_env import emit_json, system_info  # scripts/ is on sys.path when this script runs
 from sixaxis_avoid.sb3 import SixAxisVecEnv
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
@@ -110,14 +109,7 @@ def main() -> None:
     args = parse_args()
     out: dict = {
         "config": vars(args),
-        "system": {
-            "python": sys.version.split()[0],
-            "platform": platform.platform(),
-            "cpus": os.cpu_count(),
-            "load_average_at_start": os.getloadavg()[0],
-            "stable_baselines3": stable_baselines3.__version__,
-            "sixaxis_avoid": sixaxis_avoid.__version__,
-        },
+        "system": system_info(stable_baselines3=stable_baselines3.__version__),
     }
     rows = []
     for n in args.num_envs:
