@@ -36,7 +36,7 @@
 //! let urdf = export(&s, ExportFormat::Urdf);
 //! assert!(urdf.contains(r#"<joint name="joint1" type="revolute">"#));
 //! let mjcf = export(&s, ExportFormat::Mjcf);
-//! assert_eq!(mjcf.matches(r#"type="box""#).count(), s.obstacles.len());
+//! assert_eq!(mjcf.matches(r#"class="obstacle" pos="#).count(), s.obstacles.len());
 //! ```
 
 use std::f64::consts::PI;
