@@ -19,6 +19,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from docsections import splice  # scripts/ is on sys.path when this script runs
+
 ROOT = Path(__file__).resolve().parent.parent
 
 # Goals from the issues: (criterion id, goal in ns). Ids not listed have no goal.
@@ -162,6 +164,57 @@ def report(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def sb3_section(data: dict) -> list[str]:
+    """The Stable-Baselines3 section, from the JSON of scripts/bench_sb3.py (run separately:
+    its PPO runs take minutes)."""
+    system = data["system"]
+    lines = [
+        "## Stable-Baselines3 VecEnvs (scripts/bench_sb3.py)",
+        "",
+        "`sixaxis_avoid.sb3.SixAxisVecEnv` (one Rust call per batched step) against SB3's",
+        "`DummyVecEnv` and `SubprocVecEnv` over `gym.make('SixAxisAvoid-v0')` envs, random",
+        "actions, SB3 semantics (immediate reset, one info dict per env). Measured by",
+        f"`python scripts/bench_sb3.py --num-envs {' '.join(map(str, data['config']['num_envs']))}"
+        f" --ppo-steps {data['config']['ppo_steps']}` ({system['cpus']} cores, load average"
+        f" {system['load_average_at_start']:.1f} at the start: other jobs shared the machine, so"
+        " the absolute figures are low; the ratios are what to read).",
+        "",
+        "| N | SixAxisVecEnv steps/s | DummyVecEnv steps/s | SubprocVecEnv steps/s | vs Dummy |"
+        " vs Subproc |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in data["steps_per_s"]:
+        lines.append(
+            f"| {r['num_envs']} | {r['native_steps_per_s']:,} | {r['dummy_steps_per_s']:,} "
+            f"| {r['subproc_steps_per_s']:,} | {r['speedup_vs_dummy']}x "
+            f"| {r['speedup_vs_subproc']}x |"
+        )
+    ppo = data.get("ppo")
+    if ppo:
+        n = ppo["num_envs"]
+        lines += [
+            "",
+            "PPO (`MlpPolicy`, n_steps 256, batch 256, ent_coef 0.01, "
+            f"seed {data['config']['seed']}, CPU), {data['config']['ppo_steps']:,} timesteps "
+            f"on {n} envs, total wall time:",
+            "",
+            "| VecEnv | seconds |",
+            "|---|---|",
+        ]
+        for kind, label in (
+            ("native", "SixAxisVecEnv"),
+            ("dummy", "DummyVecEnv"),
+            ("subproc", "SubprocVecEnv"),
+        ):
+            lines.append(f"| {label} | {ppo[kind]['seconds']:.1f} |")
+        lines += [
+            "",
+            "PPO's time is mostly the network (rollout inference and 10 epochs of updates per",
+            "rollout), the same for every VecEnv; the difference between the rows is the env side.",
+        ]
+    return [*lines, ""]
+
+
 def write_atomic(path: Path, text: str) -> None:
     from sixaxis_avoid import _core
 
@@ -169,10 +222,19 @@ def write_atomic(path: Path, text: str) -> None:
     _core.write_atomic(path, text)
 
 
+def write_report(path: Path, data: dict) -> None:
+    """This script's sections of the report (`core`, and `sb3` when scripts/bench_sb3.py has
+    written its JSON); the sections of other scripts (`scale`) stay as they are."""
+    splice(path, "core", report(data))
+    sb3 = ROOT / "docs" / "figures" / "bench_sb3.json"
+    if sb3.exists():
+        splice(path, "sb3", "\n".join(sb3_section(json.loads(sb3.read_text()))))
+
+
 def main() -> None:
     args = parse_args()
     if args.render_only:
-        write_atomic(args.report, report(json.loads(args.out.read_text())))
+        write_report(args.report, json.loads(args.out.read_text()))
         print(f"wrote {args.report} from {args.out}")
         return
     data = {"machine": machine(), "quick": args.quick}
@@ -181,7 +243,7 @@ def main() -> None:
     if not args.skip_python:
         data["python"] = run_python(args.quick)
     write_atomic(args.out, json.dumps(data, indent=2))
-    write_atomic(args.report, report(data))
+    write_report(args.report, data)
     print(f"wrote {args.out} and {args.report}")
 
 

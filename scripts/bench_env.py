@@ -91,13 +91,7 @@ def main() -> None:
     args = parse_args()
     out: dict = {
         "config": vars(args),
-        "system": {
-            "python": sys.version.split()[0],
-            "platform": platform.platform(),
-            "cpus": os.cpu_count(),
-            "gymnasium": gym.__version__,
-            "sixaxis_avoid": sixaxis_avoid.__version__,
-        },
+        "system": system_info(gymnasium=gym.__version__),
     }
     ours = bench_single(
         "SixAxisAvoid-v0", args.single_steps, args.seed, args.repeats, obs_type=args.obs_type
@@ -130,10 +124,27 @@ def main() -> None:
         print(json.dumps(row), file=sys.stderr)
         vec.append(row)
     out["vector"] = vec
+    emit_json(out, args.out)
+
+
+def system_info(**versions: str) -> dict:
+    """Python, platform, CPUs, load average and package versions of a benchmark run."""
+    return {
+        "python": sys.version.split()[0],
+        "platform": platform.platform(),
+        "cpus": os.cpu_count(),
+        "load_average_at_start": os.getloadavg()[0],
+        "sixaxis_avoid": sixaxis_avoid.__version__,
+        **versions,
+    }
+
+
+def emit_json(out: dict, path: str | None) -> None:
+    """Print the results as JSON, and write them to ``path`` too when given."""
     text = json.dumps(out, indent=2)
     print(text)
-    if args.out:
-        with open(args.out, "w") as f:
+    if path:
+        with open(path, "w") as f:
             f.write(text + "\n")
 
 

@@ -15,14 +15,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import subprocess
 import tempfile
 from pathlib import Path
 
+from docsections import splice  # scripts/ is on sys.path when this script runs
+
 ROOT = Path(__file__).resolve().parent.parent
-BEGIN, END = "<!-- scale:begin -->", "<!-- scale:end -->"
 # Goals of issue 13, seconds: learning the optimal path, and the whole Algorithm 2.
 LEARN_GOAL_S = {50.0: 0.2, 25.0: 1.0, 12.5: 10.0}
 PLAN_GOAL_S = {25.0: 2.0}
@@ -135,16 +135,7 @@ def main() -> None:
     print(text)
     if a.no_doc:
         return
-    doc = Path(a.doc)
-    body = doc.read_text()
-    section = f"{BEGIN}\n{text}\n{END}"
-    if BEGIN in body and END in body:
-        body = body[: body.index(BEGIN)] + section + body[body.index(END) + len(END) :]
-    else:
-        body = body.rstrip("\n") + "\n\n" + section + "\n"
-    tmp = doc.with_suffix(f".tmp-{os.getpid()}")
-    tmp.write_text(body)
-    tmp.replace(doc)
+    splice(Path(a.doc), "scale", text)
 
 
 if __name__ == "__main__":

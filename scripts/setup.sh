@@ -15,6 +15,7 @@ fi
 source .venv/bin/activate
 python -m pip install --quiet --upgrade pip
 python -m pip install --quiet "maturin>=1.7,<2"
+# requirements-dev.txt includes the optional extras (render, sb3, mujoco, urdf, video).
 python -m pip install --quiet -r requirements-dev.txt
 maturin develop --release --quiet
 cargo build --release --quiet -p sixaxis-cli

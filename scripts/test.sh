@@ -10,4 +10,5 @@ echo "== cargo clippy"; cargo clippy --workspace --all-targets --quiet -- -D war
 echo "== cargo doc";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet -p sixaxis-core -p sixaxis-cli
 echo "== ruff";         ruff check python tests scripts && ruff format --check python tests scripts
 echo "== cargo test";   cargo test --workspace --release
-echo "== pytest";       python -m pytest tests -q
+# Slow learning runs (marker `slow`) are left out here; scripts/test_slow.sh runs them.
+echo "== pytest";       python -m pytest tests -q -m "not slow"

@@ -36,6 +36,14 @@ def near_target(paper_simple) -> sixaxis_avoid.Scenario:
     )
 
 
+@pytest.fixture(scope="session")
+def paper_simple_plan():
+    """Algorithm 2 on paper_simple, seed 0 (a success)."""
+    p = sixaxis_avoid.plan("paper_simple", seed=0)
+    assert p.success, p.failure
+    return p
+
+
 ROOT = Path(__file__).resolve().parent.parent
 
 

@@ -37,6 +37,7 @@ from sixaxis_avoid._core import (
     __version__,
     cells_reachable,
     clear_pose_at,
+    export_scenario,
     generate_scenario,
     greedy_path_of,
     load_q,
@@ -68,6 +69,14 @@ def _register() -> None:
 _register()
 
 
+def verify_plan(plan: Any, scenario: Any = None, **kwargs: Any):
+    """Replay a plan in MuJoCo (see :func:`sixaxis_avoid.verify.verify_plan`; needs the
+    ``mujoco`` extra)."""
+    from sixaxis_avoid.verify import verify_plan as _verify
+
+    return _verify(plan, scenario, **kwargs)
+
+
 def make(env_id: str = ENV_ID, scenario: Any = None, **kwargs: Any) -> gym.Env:
     """``gym.make`` with ``max_episode_steps`` taken from the scenario's
     ``learning.max_steps_per_episode`` (unless given)."""
@@ -96,6 +105,7 @@ __all__ = [
     "__version__",
     "cells_reachable",
     "clear_pose_at",
+    "export_scenario",
     "generate_scenario",
     "greedy_path_of",
     "load_q",
@@ -104,4 +114,5 @@ __all__ = [
     "shortest_path",
     "train",
     "unreachable_cells",
+    "verify_plan",
 ]

@@ -253,6 +253,7 @@ class VecEnvCore:
     collided: npt.NDArray[np.bool_]
     distance_to_target: npt.NDArray[np.float64]
     cells: npt.NDArray[np.int32]
+    detour_penalty: npt.NDArray[np.float64]
     steps: npt.NDArray[np.uint32]
     target_cells: npt.NDArray[np.int32]
 
@@ -322,6 +323,11 @@ def plan(
     max_replans: int | None = None,
     learner: PathLearner | None = None,
 ) -> PlanResult: ...
+def export_scenario(
+    scenario: ScenarioLike = None,
+    format: str = "mjcf",
+    path: str | PathLike[str] | None = None,
+) -> str: ...
 def generate_scenario(
     seed: int,
     density: float = 0.08,

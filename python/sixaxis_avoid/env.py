@@ -17,6 +17,7 @@ from sixaxis_avoid._checks import (
     check_optional_bool,
     invalid,
 )
+from sixaxis_avoid._deps import require
 
 VECTOR_OBS_DIM = _core.VECTOR_OBS_DIM
 
@@ -190,6 +191,9 @@ class SixAxisAvoidEnv(gym.Env):
         ):
             raise invalid("render_size", render_size, "must be an integer in 64..=4096")
         check_random_target(obs_type, random_target)
+        if render_mode == "human":
+            # Fail at construction, not at the first frame, if Matplotlib is missing.
+            require("matplotlib", 'render_mode="human"')
 
         self.scenario: _core.Scenario = as_scenario(scenario)
         self.obs_type = obs_type
@@ -314,23 +318,16 @@ class SixAxisAvoidEnv(gym.Env):
 
     # Rendering --------------------------------------------------------------------------
     def _frame(self) -> np.ndarray:
-        from sixaxis_avoid.render import IsoRenderer
+        from sixaxis_avoid.render import SceneRenderer
 
         if self._renderer is None:
-            self._renderer = IsoRenderer(
-                self.scenario.bounds,
-                self.scenario.obstacles,
+            self._renderer = SceneRenderer(
+                self.scenario,
                 self._core.extra_obstacles,
                 size=self._render_size,
-                include_origin=self.render_arm,
+                render_arm=self.render_arm,
             )
-        arm = None
-        if self.render_arm:
-            cell = self._core.cell
-            q = _arm.clear_pose(self.scenario, cell)
-            if q is not None:
-                arm = _core.Arm.from_scenario(self.scenario).points_mm(q) / self.scenario.cell_mm
-        return self._renderer.frame(self._core.path, self._core.cell, self._core.target_cell, arm)
+        return self._renderer.frame(self._core.path, self._core.cell, self._core.target_cell)
 
     def _render_human(self) -> None:
         from sixaxis_avoid.render import HumanWindow

@@ -8,7 +8,8 @@ over the obstacles on purpose, so that the terminal is never hidden.
 
 ``human`` mode shows the same frames in a Matplotlib window; without a display (Linux with
 neither ``DISPLAY`` nor ``WAYLAND_DISPLAY``) Matplotlib's non-interactive Agg backend is
-used, so nothing opens and nothing fails.
+used, so nothing opens and nothing fails. Matplotlib is optional (the ``render`` extra):
+without it, ``human`` mode raises Gymnasium's ``DependencyNotInstalled`` naming the extra.
 """
 
 from __future__ import annotations
@@ -17,8 +18,11 @@ import math
 import os
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+
+from sixaxis_avoid._deps import require
 
 Cell = tuple[int, int, int]
 
@@ -282,6 +286,35 @@ class IsoRenderer:
         return img
 
 
+class SceneRenderer:
+    """Frames of one scenario: the :class:`IsoRenderer` scene, and with ``render_arm`` the
+    arm's polyline in the first clear IK pose at the terminal's cell (none if no clear pose)."""
+
+    def __init__(
+        self,
+        scenario: Any,
+        unreachable: Sequence[Cell] = (),
+        size: int = 512,
+        render_arm: bool = False,
+    ):
+        self.scenario = scenario
+        self.render_arm = render_arm
+        self.iso = IsoRenderer(
+            scenario.bounds, scenario.obstacles, unreachable, size=size, include_origin=render_arm
+        )
+
+    def frame(self, path: Sequence[Cell], terminal: Cell, target: Cell) -> np.ndarray:
+        """One frame, ``uint8`` ``(H, W, 3)``."""
+        arm = None
+        if self.render_arm:
+            from sixaxis_avoid import _arm, _core
+
+            q = _arm.clear_pose(self.scenario, terminal)
+            if q is not None:
+                arm = _core.Arm.from_scenario(self.scenario).points_mm(q) / self.scenario.cell_mm
+        return self.iso.frame(path, terminal, target, arm)
+
+
 def has_display() -> bool:
     """Whether a window can be opened (Linux: DISPLAY or WAYLAND_DISPLAY is set)."""
     if sys.platform.startswith("linux"):
@@ -293,7 +326,7 @@ class HumanWindow:
     """A Matplotlib window that shows frames; headless, it draws on Agg and shows nothing."""
 
     def __init__(self, title: str, fps: float):
-        import matplotlib
+        matplotlib = require("matplotlib", 'render_mode="human"')
 
         if not has_display():
             import importlib

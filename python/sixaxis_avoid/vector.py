@@ -40,8 +40,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
     with ``s + i``, as ``SyncVectorEnv`` does. ``reset(options={"reset_mask": mask})`` resets
     only the envs where ``mask`` is true.
 
-    ``info`` holds arrays ``collided``, ``distance_to_target``, ``cell`` (``(N, 3)`` int32)
-    and ``is_success``, each with its ``_key`` mask (all true). Observation types
+    ``info`` holds arrays ``collided``, ``distance_to_target``, ``cell`` (``(N, 3)`` int32),
+    ``is_success`` and ``detour_penalty``, each with its ``_key`` mask (all true). Observation types
     ``"vector"``, ``"index"`` and ``"goal"``; no rendering.
     """
 
@@ -109,6 +109,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         self._collided = self._core.collided
         self._distance = self._core.distance_to_target
         self._cells = self._core.cells
+        self._detour = self._core.detour_penalty
         self._mask = np.ones(num_envs, dtype=bool)
         self._seeded = False
 
@@ -152,6 +153,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             "_cell": m,
             "is_success": self._terminated.copy(),
             "_is_success": m,
+            "detour_penalty": self._result(self._detour),
+            "_detour_penalty": m,
         }
 
     def reset(
@@ -171,7 +174,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         self._core.reset(mask)
         return self._observations(), self._info()
 
-    def step(self, actions):
+    def actions_array(self, actions) -> np.ndarray:
+        """``actions`` as the int64 array of shape ``(num_envs,)`` the core steps with."""
         a = np.asarray(actions)
         if a.dtype != np.int64:
             if a.dtype.kind not in "iu":
@@ -181,7 +185,10 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             a = a.reshape(-1) if a.size == self.num_envs else a
             if a.shape != (self.num_envs,):
                 raise invalid("actions", actions, f"must have shape ({self.num_envs},)")
-        self._core.step(a)
+        return a
+
+    def step(self, actions):
+        self._core.step(self.actions_array(actions))
         return (
             self._observations(),
             self._result(self._rewards),

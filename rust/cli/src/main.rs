@@ -144,6 +144,21 @@ enum Command {
         #[command(flatten)]
         out: OutArgs,
     },
+    /// Export a scenario: the arm as URDF, or the arm and its obstacles as a MuJoCo MJCF scene.
+    ///
+    /// The XML goes to stdout or to --out FILE (written atomically). Lengths in metres.
+    ///
+    /// Example: sixaxis export --format mjcf --scenario paper_simple --out paper_simple.xml
+    Export {
+        /// urdf (the arm) or mjcf (the arm, obstacles, target and start).
+        #[arg(long, value_name = "urdf|mjcf")]
+        format: String,
+        /// Scenario file or built-in name.
+        #[arg(long, value_name = "NAME_OR_FILE", default_value = "paper_simple")]
+        scenario: String,
+        #[command(flatten)]
+        out: OutArgs,
+    },
     /// Run the paper's experiments: JSON, figures and docs/REPRODUCTION.md.
     ///
     /// Example: sixaxis reproduce --seeds 10 --out-dir results/reproduce
@@ -176,6 +191,10 @@ fn arm_of(scenario: &Option<String>) -> Result<Arm, Failure> {
 
 fn emit(value: &Value, out: &OutArgs) -> Result<(), Failure> {
     let text = serde_json::to_string_pretty(value).expect("JSON values always serialise") + "\n";
+    emit_text(&text, out)
+}
+
+fn emit_text(text: &str, out: &OutArgs) -> Result<(), Failure> {
     interrupt::writing(|| match &out.out {
         Some(path) => sixaxis_core::io::write_atomic(path, text.as_bytes()),
         None => {
@@ -290,15 +309,19 @@ fn run(cli: Cli) -> Result<(), Failure> {
             out,
         } => {
             let s = sixaxis_core::regrid::regrid(&Scenario::load(&scenario)?, cell_mm)?;
-            let text = s.to_json() + "\n";
-            match &out.out {
-                Some(path) => sixaxis_core::io::write_atomic(path, text.as_bytes())?,
-                None => print!("{text}"),
-            }
-            Ok(())
+            emit_text(&(s.to_json() + "\n"), &out)
         }
         Command::Reproduce { args, out } => emit(&reproduce::run(&args)?, &out),
         Command::Reach { scenario, out } => emit(&reach(&scenario)?, &out),
+        Command::Export {
+            format,
+            scenario,
+            out,
+        } => {
+            let format: sixaxis_core::export::ExportFormat = format.parse()?;
+            let s = Scenario::load(&scenario)?;
+            emit_text(&sixaxis_core::export::export(&s, format), &out)
+        }
         Command::Generate {
             seed,
             density,

@@ -386,6 +386,8 @@ pub struct BatchBuffers<'a> {
     pub distance: &'a mut [f64],
     /// The terminal's cell, row-major `(n, 3)`.
     pub cells: &'a mut [i32],
+    /// Eq. 9's part of the step's reward (<= 0, before `reward_scale`; 0 after a reset).
+    pub detour_penalty: &'a mut [f64],
 }
 
 /// N environments stepped together, with next-step autoreset and a step cap.
@@ -467,6 +469,7 @@ impl BatchEnv {
             && buf.truncated.len() == n
             && buf.collided.len() == n
             && buf.distance.len() == n
+            && buf.detour_penalty.len() == n
             && buf.cells.len() == 3 * n;
         if ok {
             Ok(())
@@ -501,6 +504,7 @@ impl BatchEnv {
         buf.rewards[i] = 0.0;
         buf.terminated[i] = false;
         buf.truncated[i] = false;
+        buf.detour_penalty[i] = 0.0;
         self.write(i, buf);
     }
 
@@ -565,6 +569,7 @@ impl BatchEnv {
             buf.rewards[i] = out.reward;
             buf.terminated[i] = out.reached;
             buf.truncated[i] = truncated;
+            buf.detour_penalty[i] = out.detour_penalty;
             self.needs_reset[i] = out.reached || truncated;
             self.write(i, &mut buf);
         }
@@ -671,6 +676,7 @@ mod tests {
             vec![0.0; n],
         );
         let mut cells = vec![0i32; 3 * n];
+        let mut detour = vec![0.0; n];
         macro_rules! bufs {
             () => {
                 BatchBuffers {
@@ -681,6 +687,7 @@ mod tests {
                     collided: &mut co,
                     distance: &mut d,
                     cells: &mut cells,
+                    detour_penalty: &mut detour,
                 }
             };
         }

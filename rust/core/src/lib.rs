@@ -20,13 +20,14 @@
 //! - [`regrid`] — the same physical world at another cell size.
 //! - [`generator`] — random cluttered scenarios for benchmarks.
 //! - [`names`] — scenario names: files, built-ins, `generated:SEED`, `generated:A..B` lists.
+//! - [`export`] — the arm as URDF, the arm and its world as a MuJoCo MJCF scene.
 //! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
 //! - [`error`] — the one error type; [`io`] — atomic file output; [`host`] — the
 //!   machine description of reports.
 //!
 //! Layers, bottom up, without cycles: `scenario` (with `kinematics` and `ik` for its arm);
 //! `grid`; `qlearning`; `clearance`; `planner`; `replanning`, `request`; `generator`;
-//! `names`.
+//! `names`; `regrid` and `export` (each on `scenario` alone).
 //!
 //! Units: lengths in mm unless a name says cells; angles in radians unless a name says deg.
 //!
@@ -43,6 +44,7 @@
 pub mod clearance;
 pub mod env;
 pub mod error;
+pub mod export;
 pub mod generator;
 pub mod grid;
 pub mod host;

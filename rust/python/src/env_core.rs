@@ -337,6 +337,7 @@ pub struct PyVecEnvCore {
     collided: Py<PyArray1<bool>>,
     distance: Py<PyArray1<f64>>,
     cells: Py<PyArray2<i32>>,
+    detour: Py<PyArray1<f64>>,
 }
 
 macro_rules! with_buffers {
@@ -347,6 +348,7 @@ macro_rules! with_buffers {
         let mut rw_co = $self.collided.bind($py).try_readwrite()?;
         let mut rw_d = $self.distance.bind($py).try_readwrite()?;
         let mut rw_c = $self.cells.bind($py).try_readwrite()?;
+        let mut rw_dp = $self.detour.bind($py).try_readwrite()?;
         let obs_any = $self.obs_buf.bind($py);
         let mut rw_of;
         let mut rw_oi;
@@ -368,6 +370,7 @@ macro_rules! with_buffers {
             collided: rw_co.as_slice_mut()?,
             distance: rw_d.as_slice_mut()?,
             cells: rw_c.as_slice_mut()?,
+            detour_penalty: rw_dp.as_slice_mut()?,
         };
         $body
     }};
@@ -430,6 +433,7 @@ impl PyVecEnvCore {
             collided: PyArray1::from_vec(py, vec![false; n]).unbind(),
             distance: PyArray1::zeros(py, n, false).unbind(),
             cells: PyArray2::zeros(py, [n, 3], false).unbind(),
+            detour: PyArray1::zeros(py, n, false).unbind(),
         })
     }
 
@@ -518,6 +522,11 @@ impl PyVecEnvCore {
     #[getter]
     fn cells(&self, py: Python<'_>) -> Py<PyArray2<i32>> {
         self.cells.clone_ref(py)
+    }
+    /// Eq. 9's part of each env's last reward, before ``reward_scale`` (0 after a reset).
+    #[getter]
+    fn detour_penalty(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
+        self.detour.clone_ref(py)
     }
     /// Steps since the reset, per env.
     #[getter]

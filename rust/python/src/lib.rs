@@ -10,6 +10,7 @@ mod arm;
 mod convert;
 mod env_core;
 mod errors;
+mod export;
 mod plan;
 mod planner;
 mod request;
@@ -68,6 +69,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(util::write_atomic, m)?)?;
     m.add_function(wrap_pyfunction!(util::machine, m)?)?;
     m.add_function(wrap_pyfunction!(util::expand_names, m)?)?;
+    m.add_function(wrap_pyfunction!(export::export_scenario, m)?)?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     m.add("DEFAULT_SCENARIO", scenario::DEFAULT_SCENARIO)?;
     m.add_function(wrap_pyfunction!(_raise_core_error, m)?)?;
