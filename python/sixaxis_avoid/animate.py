@@ -114,7 +114,8 @@ def _mujoco_drawer(s: _core.Scenario, size: int):
 
 def write_frames(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps: int = 20) -> Path:
     """Write frames as a GIF (looping) or MP4 (by the file's suffix) with imageio; the file
-    appears complete or not at all (written to a temporary sibling, then renamed)."""
+    appears complete or not at all (a GIF through the core's write_atomic; an MP4 written to
+    a temporary sibling, then renamed)."""
     iio = require("imageio.v3", "Writing an animation")
     out = Path(path)
     suffix = out.suffix.lower()
@@ -122,13 +123,17 @@ def write_frames(frames: Sequence[np.ndarray], path: str | os.PathLike[str], fps
         raise invalid("path", str(out), "must end in .gif or .mp4")
     if len(frames) == 0:
         raise invalid("frames", "[]", "an animation needs at least one frame")
+    if suffix == ".gif":
+        data = iio.imwrite(
+            "<bytes>", np.stack(frames), extension=".gif", duration=1000.0 / fps, loop=0
+        )
+        _core.write_atomic(out, data)
+        return out
+    # imageio's FFMPEG writer needs a file: written beside the target, then renamed.
     tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}{suffix}")
     try:
-        if suffix == ".gif":
-            iio.imwrite(tmp, np.stack(frames), duration=1000.0 / fps, loop=0)
-        else:
-            require("imageio_ffmpeg", "Writing an MP4")
-            iio.imwrite(tmp, np.stack(frames), fps=fps, plugin="FFMPEG", macro_block_size=1)
+        require("imageio_ffmpeg", "Writing an MP4")
+        iio.imwrite(tmp, np.stack(frames), fps=fps, plugin="FFMPEG", macro_block_size=1)
         os.replace(tmp, out)
     finally:
         if tmp.exists():

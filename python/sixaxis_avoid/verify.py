@@ -291,8 +291,7 @@ def main(argv: list[str] | None = None) -> int:
             )
         out = report.to_dict()
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(out, f, indent=2)
+        _core.write_atomic(args.json, json.dumps(out, indent=2) + "\n")
     return 0
 
 
