@@ -24,3 +24,19 @@ def splice(doc: Path, name: str, text: str) -> None:
         body = body.rstrip("\n") + ("\n\n" if body.strip() else "") + section + "\n"
     doc.parent.mkdir(parents=True, exist_ok=True)
     _core.write_atomic(doc, body)
+
+
+def main() -> None:
+    """``python scripts/docsections.py DOC NAME`` replaces section NAME of DOC with stdin."""
+    import argparse
+    import sys
+
+    p = argparse.ArgumentParser(description=main.__doc__)
+    p.add_argument("doc", type=Path, help="the Markdown document")
+    p.add_argument("name", help="the section's name (between <!-- NAME:begin/end -->)")
+    a = p.parse_args()
+    splice(a.doc, a.name, sys.stdin.read())
+
+
+if __name__ == "__main__":
+    main()
