@@ -312,7 +312,7 @@ mod tests {
         };
         assert_eq!(
             bad.resolve(&s).unwrap_err().to_string(),
-            "invalid argument `initial_q` = \"optimistic\": must be one of zero, distance"
+            "invalid argument `initial_q` = optimistic: must be one of zero, distance"
         );
     }
 

@@ -274,7 +274,7 @@ impl InitialQ {
         match name {
             "zero" => Ok(InitialQ::Zero),
             "distance" => Ok(InitialQ::Distance),
-            _ => Err(Error::argument(field, format!("{name:?}"), Self::names_reason())),
+            _ => Err(Error::argument(field, name, Self::names_reason())),
         }
     }
 
@@ -288,7 +288,7 @@ impl TryFrom<String> for InitialQ {
     fn try_from(name: String) -> std::result::Result<Self, String> {
         InitialQ::from_name("learning.initial_q", &name).map_err(|_| {
             format!(
-                "field `learning.initial_q` = {name:?}: {}",
+                "field `learning.initial_q` = {name}: {}",
                 Self::names_reason()
             )
         })

@@ -90,7 +90,12 @@ pub fn train_request(
         detour: bool_kw(py, "detour", detour)?,
         distance: bool_kw(py, "distance", distance)?,
         max_steps_per_episode: int_kw(py, MAX_STEPS, max_steps_per_episode)?,
-        initial_q: str_kw(py, "initial_q", initial_q, "must be \"zero\", \"distance\" or None")?,
+        initial_q: str_kw(
+            py,
+            "initial_q",
+            initial_q,
+            "must be \"zero\", \"distance\" or None",
+        )?,
     })
 }
 
