@@ -30,7 +30,10 @@ GOOD = [
         ["--max-steps-per-episode", "40", "--seed", "1", "--episodes", "300"],
     ),
     ({"initial_q": "distance", "episodes": 300}, ["--initial-q", "distance", "--episodes", "300"]),
-    ({"initial_q": "zero", "seed": 2, "episodes": 300}, ["--initial-q", "zero", "--seed", "2", "--episodes", "300"]),
+    (
+        {"initial_q": "zero", "seed": 2, "episodes": 300},
+        ["--initial-q", "zero", "--seed", "2", "--episodes", "300"],
+    ),
 ]
 
 # (Python keywords, CLI flags, the error text both give).

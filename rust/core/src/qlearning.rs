@@ -62,6 +62,20 @@
 //!   episode `eta >= e1 + H` after which the greedy path reaches the target and has not
 //!   changed for `H` episodes (tracked exactly after every episode). `epsilon_decay_episodes`
 //!   is not used. Hitting the cap ends the run like a fixed run of that length.
+//! - **`initial_q = "distance"`** (`learning.initial_q`, `--initial-q distance`; ours, the
+//!   paper's Q = 0 stays the default): with no table given, Q starts at
+//!   [`distance_bound_table`], an optimistic bound of the return of each move. A move costs
+//!   at least `1 + manhattan(next, target)` moves to the target in a 6-connected grid, and
+//!   eq. 10 can pay at most `r_e (d_o - L_j)` at the `j`-th of them, where `L_j` is a lower
+//!   bound of the distance left ([`distance_bound_values`]). The bound is at least the best
+//!   return of every collision-free path (tested), so greedy learning from it behaves like
+//!   A*/LRTA*: it follows moves that could still be optimal and lowers them when the world
+//!   says otherwise, instead of trying every action of every state as Q = 0 with rewards
+//!   of -p does. A colliding move counts as an ordinary step that stays put (its first
+//!   reward is taken as `-p`, not `-P`), so the start table never prefers a wall. Caveat:
+//!   with eq. 9 off and `P < p`, a state more than 9 moves from the target (at the
+//!   defaults) is worth more colliding forever (`-P / (1 - gamma)` = -80,000) than any
+//!   path; no start table changes that optimum, so no path is learned there.
 //! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
 //!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
 //!   epsilon schedule) count from 0 again, and the converged episode is an index of this
