@@ -115,11 +115,18 @@ def measure(binary: str, scenario: str, cell: float, rule: str, seed: int, tmp: 
     }
 
 
-def goal(value: float, limit: float | None, fmt: str) -> str:
+def goal(value: float, limit: float | None, fmt) -> str:
+    """``value`` in ``fmt`` (a format string or a function), with its goal's verdict."""
+    show = fmt if callable(fmt) else fmt.format
     if limit is None:
-        return fmt.format(value)
+        return show(value)
     verdict = "met" if value <= limit else f"missed, {value / limit:.1f}x"
-    return f"{fmt.format(value)} (goal ≤ {fmt.format(limit)}: {verdict})"
+    return f"{show(value)} (goal ≤ {show(limit)}: {verdict})"
+
+
+def secs(value: float) -> str:
+    """A wall time: milliseconds below 0.1 s, else seconds."""
+    return f"{value * 1000:.1f} ms" if value < 0.1 else f"{value:.2f} s"
 
 
 def table(rows: list[dict]) -> str:
@@ -138,9 +145,9 @@ def table(rows: list[dict]) -> str:
             f"| {c:g} mm | {rule_of(r)} | {r['states']:,} | {r['q_table_bytes'] / 1e6:.2f} MB "
             f"| {r['shortest_path_length']} | {r['path_length']} "
             f"| {r['converged_episode']:,} | {r['steps_to_converged']:,} "
-            f"| {r['episodes_run']:,} | {goal(r['train_wall_s'], LEARN_GOAL_S.get(c), '{:.2f} s')} "
+            f"| {r['episodes_run']:,} | {goal(r['train_wall_s'], LEARN_GOAL_S.get(c), secs)} "
             f"| {train_rss} "
-            f"| {goal(r['plan_wall_s'], PLAN_GOAL_S.get(c), '{:.2f} s')} "
+            f"| {goal(r['plan_wall_s'], PLAN_GOAL_S.get(c), secs)} "
             f"({r['plan_path_points']}, {r['plan_replans']}{failed}) "
             f"| {r['plan_peak_rss_kb'] / 1024:.0f} MB |"
         )
