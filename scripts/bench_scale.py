@@ -23,6 +23,7 @@ import re
 import subprocess
 import tempfile
 import time
+from os import getloadavg
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -87,7 +88,7 @@ def measure(binary: str, scenario: str, cell: float, rule: str, seed: int, tmp: 
         states *= hi - lo + 1
     common = ["--scenario", str(world), "--seed", str(seed), "--episodes", "auto", "-q"]
     common += ["--initial-q", rule]
-    load = os.getloadavg()[0]
+    load = getloadavg()[0]
     train, train_rss = timed([binary, "train", *common, "--no-curve"])
     plan, plan_rss = timed([binary, "plan", *common])
     return {
