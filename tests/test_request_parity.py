@@ -29,6 +29,11 @@ GOOD = [
         {"max_steps_per_episode": 40, "seed": 1, "episodes": 300},
         ["--max-steps-per-episode", "40", "--seed", "1", "--episodes", "300"],
     ),
+    ({"initial_q": "distance", "episodes": 300}, ["--initial-q", "distance", "--episodes", "300"]),
+    (
+        {"initial_q": "zero", "seed": 2, "episodes": 300},
+        ["--initial-q", "zero", "--seed", "2", "--episodes", "300"],
+    ),
 ]
 
 # (Python keywords, CLI flags, the error text both give).
@@ -54,6 +59,11 @@ BAD = [
         {"max_steps_per_episode": 0},
         ["--max-steps-per-episode", "0"],
         "invalid argument `max_steps_per_episode` = 0: must be an integer in 1..=4294967295",
+    ),
+    (
+        {"initial_q": "optimistic"},
+        ["--initial-q", "optimistic"],
+        "invalid argument `initial_q` = optimistic: must be one of zero, distance",
     ),
 ]
 
@@ -143,6 +153,7 @@ def test_same_plan_error(sixaxis_bin, kwargs, flags, text):
         ({"seed": "3"}, "seed"),
         ({"assist": 1}, "assist"),
         ({"detour": "yes"}, "detour"),
+        ({"initial_q": 3}, "initial_q"),
     ],
 )
 def test_python_only_values_rejected_alike(command, kwargs, name):

@@ -153,7 +153,7 @@ def train(
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
     extra_obstacles: Iterable[CellLike] | None = None,
-    initial_q: npt.NDArray[np.float64] | None = None,
+    initial_q: Literal["zero", "distance"] | npt.NDArray[np.float64] | None = None,
     progress: Callable[[int], object] | None = None,
 ) -> TrainResult: ...
 def load_q(
@@ -320,6 +320,7 @@ def plan(
     detour: bool | None = None,
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
+    initial_q: Literal["zero", "distance"] | None = None,
     max_replans: int | None = None,
     learner: PathLearner | None = None,
 ) -> PlanResult: ...

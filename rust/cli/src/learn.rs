@@ -55,6 +55,11 @@ pub struct LearnArgs {
     /// Turn distance assistance (eq. 10) on.
     #[arg(long)]
     pub distance: bool,
+    /// How the Q-table starts: zero (the paper) or distance (an optimistic bound from the
+    /// Manhattan distance to the target; see docs/SCENARIOS.md). Default: the scenario's
+    /// `learning.initial_q`.
+    #[arg(long, value_name = "zero|distance")]
+    pub initial_q: Option<String>,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -84,6 +89,7 @@ impl LearnArgs {
             detour: switch(self.detour, self.no_detour),
             distance: switch(self.distance, self.no_distance),
             max_steps_per_episode: int(MAX_STEPS, &self.max_steps_per_episode)?,
+            initial_q: self.initial_q.clone(),
         })
     }
 
@@ -101,7 +107,7 @@ pub struct TrainArgs {
     #[command(flatten)]
     pub learn: LearnArgs,
     /// Start from this saved Q-table instead of zeros (resume).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", conflicts_with = "initial_q")]
     pub q_in: Option<PathBuf>,
     /// Save the learned Q-table here (atomically).
     #[arg(long, value_name = "FILE")]
@@ -125,6 +131,7 @@ pub fn train_json(
         "seed": opts.seed,
         "episodes": opts.episodes,
         "episodes_auto": opts.episodes_auto,
+        "initial_q": opts.initial_q.name(),
         "episodes_run": r.steps_per_episode.len(),
         "steps_to_converged": r.converged_episode.map(|e| {
             r.steps_per_episode[..=e as usize].iter().map(|&k| k as u64).sum::<u64>()

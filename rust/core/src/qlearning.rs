@@ -62,6 +62,20 @@
 //!   episode `eta >= e1 + H` after which the greedy path reaches the target and has not
 //!   changed for `H` episodes (tracked exactly after every episode). `epsilon_decay_episodes`
 //!   is not used. Hitting the cap ends the run like a fixed run of that length.
+//! - **`initial_q = "distance"`** (`learning.initial_q`, `--initial-q distance`; ours, the
+//!   paper's Q = 0 stays the default): with no table given, Q starts at
+//!   [`distance_bound_table`], an optimistic bound of the return of each move. A move costs
+//!   at least `1 + manhattan(next, target)` moves to the target in a 6-connected grid, and
+//!   eq. 10 can pay at most `r_e (d_o - L_j)` at the `j`-th of them, where `L_j` is a lower
+//!   bound of the distance left ([`distance_bound_values`]). The bound is at least the best
+//!   return of every collision-free path (tested), so greedy learning from it behaves like
+//!   A*/LRTA*: it follows moves that could still be optimal and lowers them when the world
+//!   says otherwise, instead of trying every action of every state as Q = 0 with rewards
+//!   of -p does. A colliding move counts as an ordinary step that stays put (its first
+//!   reward is taken as `-p`, not `-P`), so the start table never prefers a wall. Caveat:
+//!   with eq. 9 off and `P < p`, a state more than 9 moves from the target (at the
+//!   defaults) is worth more colliding forever (`-P / (1 - gamma)` = -80,000) than any
+//!   path; no start table changes that optimum, so no path is learned there.
 //! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
 //!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
 //!   epsilon schedule) count from 0 again, and the converged episode is an index of this
@@ -93,7 +107,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::grid::{Assist, Fnv, GridWorld, Transition, NUM_ACTIONS};
-use crate::scenario::{Bounds, Cell, Scenario};
+use crate::scenario::{Bounds, Cell, InitialQ, Scenario};
 
 /// Everything [`train`] needs besides the world.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -117,6 +131,10 @@ pub struct TrainOptions {
     /// Train until the greedy path settles, with `episodes` as the cap (see the module docs).
     #[serde(default)]
     pub episodes_auto: bool,
+    /// How the Q-table starts when [`train`] is given none: zeros (the paper) or the
+    /// distance bound of [`distance_bound_table`].
+    #[serde(default)]
+    pub initial_q: InitialQ,
 }
 
 /// Shortest settle horizon of `episodes_auto`, episodes.
@@ -139,6 +157,7 @@ impl TrainOptions {
             epsilon_decay_episodes: l.epsilon_decay_episodes,
             max_steps_per_episode: l.max_steps_per_episode,
             episodes_auto: false,
+            initial_q: l.initial_q,
         }
     }
 
@@ -487,6 +506,81 @@ pub fn q_update(
     v
 }
 
+/// The `"distance"` initial Q-table (`learning.initial_q`, ours; see the module docs):
+/// `Q0(s, a) = R1(s, a) + gamma * V0(next(s, a))`, where `R1` is the first step's reward
+/// with the move counted as an ordinary step (`-p`, or `+r` when it reaches the target,
+/// plus eq. 10 when on) and `V0(n)` bounds from above the return of every collision-free
+/// path from `n` to the target ([`distance_bound_values`]). The target's row is 0.
+pub fn distance_bound_table(world: &GridWorld, opts: &TrainOptions) -> QTable {
+    let v0 = distance_bound_values(world, opts);
+    let rw = world.rewards();
+    let r_e = if opts.assist.distance {
+        rw.distance_reward
+    } else {
+        0.0
+    };
+    let d_o = world.start_distance_cells();
+    let target = world.target();
+    let rows = world
+        .transitions()
+        .iter()
+        .enumerate()
+        .map(|(s, next)| {
+            if s == target {
+                return [0.0; NUM_ACTIONS];
+            }
+            next.map(|n| {
+                let n = n as usize;
+                let eq10 = r_e * (d_o - world.distance_to_target_cells(n));
+                if n == target {
+                    rw.target_reward + eq10
+                } else {
+                    -rw.step_penalty + eq10 + opts.gamma * v0[n]
+                }
+            })
+        })
+        .collect();
+    QTable { rows }
+}
+
+/// Per state `n`, an upper bound `V0(n)` of the discounted return (eqs. 5 and, when on, 10)
+/// of any collision-free path from `n` to the target (0 at the target): with
+/// `k = manhattan(n, target)` moves, at least `k` are needed, and after `j` moves the
+/// distance to the target is at least `L_j = max(d_t(n) - j, (k - j) / sqrt 3, 0)` cells,
+/// so `V0(n) = sum_{j=1}^{k-1} gamma^(j-1) (-p + r_e (d_o - L_j)) + gamma^(k-1) (r + r_e d_o)`.
+/// While every step's reward is negative (`r_e d_o < p`), a longer path only lowers this
+/// sum, so the bound holds for paths of every length. Exact on a straight free path.
+pub fn distance_bound_values(world: &GridWorld, opts: &TrainOptions) -> Vec<f64> {
+    let rw = world.rewards();
+    let (p, r, gamma) = (rw.step_penalty, rw.target_reward, opts.gamma);
+    let r_e = if opts.assist.distance {
+        rw.distance_reward
+    } else {
+        0.0
+    };
+    let d_o = world.start_distance_cells();
+    let tc = world.cell_of(world.target());
+    let inv_sqrt3 = 1.0 / 3f64.sqrt();
+    (0..world.num_states())
+        .map(|n| {
+            let c = world.cell_of(n);
+            let k: i64 = (0..3).map(|i| (c[i] - tc[i]).abs() as i64).sum();
+            if k == 0 {
+                return 0.0;
+            }
+            let d_n = world.distance_to_target_cells(n);
+            let mut sum = 0.0;
+            let mut disc = 1.0;
+            for j in 1..k {
+                let l = (d_n - j as f64).max((k - j) as f64 * inv_sqrt3).max(0.0);
+                sum += disc * (-p + r_e * (d_o - l));
+                disc *= gamma;
+            }
+            sum + disc * (r + r_e * d_o)
+        })
+        .collect()
+}
+
 /// What [`train`] returns.
 #[derive(Debug, Clone, Serialize)]
 pub struct TrainResult {
@@ -598,7 +692,10 @@ fn train_impl(
             )))
         }
         Some(q) => q,
-        None => QTable::zeros(n),
+        None => match opts.initial_q {
+            InitialQ::Zero => QTable::zeros(n),
+            InitialQ::Distance => distance_bound_table(world, opts),
+        },
     };
 
     // Rewards, computed exactly as `GridWorld::step` does: eq. 5 by kind of move
@@ -812,6 +909,148 @@ mod tests {
         assert_eq!(nth_set_bit(0b10110, 0), 1);
         assert_eq!(nth_set_bit(0b10110, 1), 2);
         assert_eq!(nth_set_bit(0b10110, 2), 4);
+    }
+
+    /// The optimum over collision-free moves (value iteration): the best return of any path
+    /// from each state to the target, under eq. 5 and (if on) eq. 10.
+    fn best_collision_free_return(world: &GridWorld, assist: Assist, gamma: f64) -> Vec<f64> {
+        let n = world.num_states();
+        let target = world.target();
+        let mut v = vec![-1e12; n];
+        v[target] = 0.0;
+        loop {
+            let mut change = 0.0f64;
+            for s in 0..n {
+                if s == target || world.is_blocked(s) {
+                    continue;
+                }
+                let mut best = f64::NEG_INFINITY;
+                for a in 0..NUM_ACTIONS {
+                    let t = world.next_state(s, a);
+                    if t == s {
+                        continue;
+                    }
+                    let r = world.base_reward(s, a, assist);
+                    best = best.max(if t == target { r } else { r + gamma * v[t] });
+                }
+                change = change.max((best - v[s]).abs());
+                v[s] = best;
+            }
+            if change < 1e-9 {
+                return v;
+            }
+        }
+    }
+
+    #[test]
+    fn distance_bound_is_admissible_and_tight_on_free_lines() {
+        for (name, assist) in [
+            ("paper_simple", Assist::on()),
+            ("paper_simple", Assist::off()),
+            ("paper_complex", Assist::on()),
+        ] {
+            let s = Scenario::builtin(name).unwrap();
+            let w = GridWorld::new(&s).unwrap();
+            let o = TrainOptions {
+                assist,
+                initial_q: InitialQ::Distance,
+                ..TrainOptions::from_scenario(&s)
+            };
+            let v0 = distance_bound_values(&w, &o);
+            let best = best_collision_free_return(&w, assist, o.gamma);
+            let q0 = distance_bound_table(&w, &o);
+            for st in 0..w.num_states() {
+                if w.is_blocked(st) || best[st] < -1e11 {
+                    continue;
+                }
+                assert!(
+                    v0[st] >= best[st] - 1e-6,
+                    "{name} {st}: {} < {}",
+                    v0[st],
+                    best[st]
+                );
+                // Q0 of a free move bounds that move's best return too.
+                for a in 0..NUM_ACTIONS {
+                    let t = w.next_state(st, a);
+                    if st == w.target() || t == st || best[t] < -1e11 {
+                        continue;
+                    }
+                    let r = w.base_reward(st, a, assist);
+                    let qa = if t == w.target() {
+                        r
+                    } else {
+                        r + o.gamma * best[t]
+                    };
+                    assert!(q0.get(st, a) >= qa - 1e-6, "{name} {st} {a}");
+                }
+            }
+        }
+        // Without obstacles the bound is exact on the axis lines through the target.
+        let mut s = Scenario::builtin("paper_simple").unwrap();
+        s.obstacles.clear();
+        let w = GridWorld::new(&s).unwrap();
+        for assist in [Assist::on(), Assist::off()] {
+            let o = TrainOptions {
+                assist,
+                ..TrainOptions::from_scenario(&s)
+            };
+            let v0 = distance_bound_values(&w, &o);
+            let best = best_collision_free_return(&w, assist, o.gamma);
+            let t = s.target;
+            let mut on_line = 0;
+            for st in 0..w.num_states() {
+                let c = w.cell_of(st);
+                if (0..3).filter(|&i| c[i] != t[i]).count() == 1 {
+                    on_line += 1;
+                    assert!(
+                        (v0[st] - best[st]).abs() < 1e-6,
+                        "{c:?}: {} {}",
+                        v0[st],
+                        best[st]
+                    );
+                }
+            }
+            assert!(on_line >= 10);
+        }
+    }
+
+    #[test]
+    fn initial_q_rule_and_explicit_table() {
+        let s = Scenario::builtin("paper_simple").unwrap();
+        let w = GridWorld::new(&s).unwrap();
+        let zero = TrainOptions::from_scenario(&s);
+        assert_eq!(
+            zero.initial_q,
+            InitialQ::Zero,
+            "the paper's learner by default"
+        );
+        let dist = TrainOptions {
+            episodes: 1,
+            initial_q: InitialQ::Distance,
+            epsilon_start: 0.0,
+            ..zero.clone()
+        };
+        // One purely greedy episode from the distance table changes only the rows it visits.
+        let r = train(&w, &dist, None, None).unwrap();
+        let q0 = distance_bound_table(&w, &dist);
+        let changed = (0..w.num_states())
+            .filter(|&st| r.q.row(st) != q0.row(st))
+            .count();
+        assert!(changed >= 1 && changed <= r.total_steps as usize);
+        // An explicit table wins over the rule.
+        let given = QTable::zeros(w.num_states());
+        let a = train(&w, &dist, Some(given), None).unwrap();
+        let b = train(
+            &w,
+            &TrainOptions {
+                initial_q: InitialQ::Zero,
+                ..dist.clone()
+            },
+            None,
+            None,
+        )
+        .unwrap();
+        assert_eq!(a.q, b.q);
     }
 
     #[test]

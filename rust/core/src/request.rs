@@ -3,7 +3,7 @@
 //!
 //! Entry points:
 //! - [`TrainRequest`] — episodes, seed, assistance (eqs. 9 and 10, together or each on its
-//!   own) and the step cap; [`TrainRequest::resolve`] against a scenario gives the
+//!   own), the step cap and the initial Q-table rule; [`TrainRequest::resolve`] against a scenario gives the
 //!   [`TrainOptions`] of [`crate::qlearning::train`].
 //! - [`PlanRequest`] — a training request plus the re-plan cap and the path learner;
 //!   [`PlanRequest::resolve`] gives the [`PlanOptions`] and [`LearnerKind`] of
@@ -39,7 +39,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::qlearning::TrainOptions;
 use crate::replanning::PlanOptions;
-use crate::scenario::Scenario;
+use crate::scenario::{InitialQ, Scenario};
 
 /// Overrides of a training run; `None` takes the scenario's `learning` value.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -64,6 +64,10 @@ pub struct TrainRequest {
     pub distance: Option<bool>,
     /// Step cap of an episode and of the greedy rollout, `1..=u32::MAX`.
     pub max_steps_per_episode: Option<i128>,
+    /// How the Q-table starts, by name: `"zero"` (the paper) or `"distance"` (see
+    /// [`crate::qlearning::distance_bound_table`]); default the scenario's
+    /// `learning.initial_q`.
+    pub initial_q: Option<String>,
 }
 
 /// The path learners [`PlanRequest::learner`] can name.
@@ -206,6 +210,9 @@ impl TrainRequest {
         if let Some(d) = self.distance {
             opts.assist.distance = d;
         }
+        if let Some(name) = &self.initial_q {
+            opts.initial_q = InitialQ::from_name("initial_q", name)?;
+        }
         opts.validate()?;
         Ok(opts)
     }
@@ -285,6 +292,28 @@ mod tests {
         let (p, l) = PlanRequest::default().resolve(&s).unwrap();
         assert_eq!(p, PlanOptions::from_scenario(&s));
         assert_eq!(l, LearnerKind::Qlearning);
+    }
+
+    #[test]
+    fn initial_q_by_name() {
+        let s = s();
+        assert_eq!(
+            TrainRequest::default().resolve(&s).unwrap().initial_q,
+            InitialQ::Zero
+        );
+        let d = TrainRequest {
+            initial_q: Some("distance".into()),
+            ..Default::default()
+        };
+        assert_eq!(d.resolve(&s).unwrap().initial_q, InitialQ::Distance);
+        let bad = TrainRequest {
+            initial_q: Some("optimistic".into()),
+            ..Default::default()
+        };
+        assert_eq!(
+            bad.resolve(&s).unwrap_err().to_string(),
+            "invalid argument `initial_q` = optimistic: must be one of zero, distance"
+        );
     }
 
     #[test]

@@ -246,6 +246,68 @@ pub struct Learning {
     pub assist_distance: bool,
     /// Default seed of the learner's random generator.
     pub seed: u64,
+    /// How the Q-table starts: `"zero"` (the paper, eq. 6) or `"distance"` (ours: an
+    /// optimistic bound from the Manhattan distance to the target, see
+    /// [`crate::qlearning`]).
+    pub initial_q: InitialQ,
+}
+
+/// How the learner's Q-table starts (`learning.initial_q`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum InitialQ {
+    /// Q = 0 everywhere: the paper's learner, the default of every scenario.
+    #[default]
+    Zero,
+    /// Ours: Q(s, a) starts at an optimistic bound of the return of reaching the target
+    /// from the move's next cell in its Manhattan distance of moves (the rule of
+    /// [`crate::qlearning`]).
+    Distance,
+}
+
+impl InitialQ {
+    /// Every name, in the order of the docs.
+    pub const NAMES: &'static [&'static str] = &["zero", "distance"];
+
+    /// The name used in scenario files, requests and results.
+    pub fn name(self) -> &'static str {
+        match self {
+            InitialQ::Zero => "zero",
+            InitialQ::Distance => "distance",
+        }
+    }
+
+    /// The rule of a name (`"zero"`, `"distance"`); the error names `field` and the value
+    /// and lists the names.
+    pub fn from_name(field: &str, name: &str) -> Result<Self> {
+        match name {
+            "zero" => Ok(InitialQ::Zero),
+            "distance" => Ok(InitialQ::Distance),
+            _ => Err(Error::argument(field, name, Self::names_reason())),
+        }
+    }
+
+    fn names_reason() -> String {
+        format!("must be one of {}", Self::NAMES.join(", "))
+    }
+}
+
+impl TryFrom<String> for InitialQ {
+    type Error = String;
+    fn try_from(name: String) -> std::result::Result<Self, String> {
+        InitialQ::from_name("learning.initial_q", &name).map_err(|_| {
+            format!(
+                "field `learning.initial_q` = {name}: {}",
+                Self::names_reason()
+            )
+        })
+    }
+}
+
+impl From<InitialQ> for String {
+    fn from(rule: InitialQ) -> String {
+        rule.name().to_string()
+    }
 }
 
 impl Default for Learning {
@@ -260,6 +322,7 @@ impl Default for Learning {
             assist_detour: true,
             assist_distance: true,
             seed: 0,
+            initial_q: InitialQ::Zero,
         }
     }
 }

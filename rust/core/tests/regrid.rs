@@ -7,7 +7,7 @@ use sixaxis_core::planner::PosePlanner;
 use sixaxis_core::qlearning::{train, TrainOptions};
 use sixaxis_core::regrid::regrid;
 use sixaxis_core::replanning::{plan, PlanOptions};
-use sixaxis_core::scenario::{DistanceTo, ObstacleBox};
+use sixaxis_core::scenario::{DistanceTo, InitialQ, ObstacleBox};
 use sixaxis_core::{Error, Scenario};
 
 /// Cells (as mm points) blocked by brute force: a cell is blocked when its centre is within
@@ -135,11 +135,45 @@ fn auto_episodes_find_the_bfs_optimum_at_each_size() {
 }
 
 #[test]
+fn distance_initial_q_finds_the_bfs_optimum_at_each_size() {
+    // learning.initial_q = "distance" with --episodes auto: the optimum at every size, in
+    // far fewer environment steps than the paper's Q = 0 (measured in docs/PERFORMANCE.md).
+    let s = Scenario::builtin("paper_simple").unwrap();
+    for cell in [100.0, 50.0, 25.0, 12.5] {
+        let r = regrid(&s, cell).unwrap();
+        let w = GridWorld::new(&r).unwrap();
+        let mut opts = TrainOptions::from_scenario(&r).auto();
+        opts.initial_q = InitialQ::Distance;
+        for seed in [0, 1] {
+            opts.seed = seed;
+            let t = train(&w, &opts, None, None).unwrap();
+            let path = t.path.expect("a path");
+            assert_eq!(
+                path.len(),
+                w.shortest_path().unwrap().len(),
+                "{cell} mm seed {seed}"
+            );
+            assert_eq!(path[0], r.start);
+            assert_eq!(*path.last().unwrap(), r.target);
+            for pair in path.windows(2) {
+                let d: i32 = (0..3).map(|i| (pair[0][i] - pair[1][i]).abs()).sum();
+                assert_eq!(d, 1);
+                assert!(!w.is_blocked(w.state_of(pair[1]).unwrap()));
+            }
+            assert!((t.steps_per_episode.len() as u32) < opts.episodes);
+        }
+    }
+}
+
+#[test]
 fn fixed_episodes_stay_the_paper_default() {
     let s = Scenario::builtin("paper_simple").unwrap();
     let o = TrainOptions::from_scenario(&s);
     assert!(!o.episodes_auto);
     assert_eq!((o.episodes, o.epsilon_decay_episodes), (10000, 9900));
+    assert_eq!(o.initial_q, InitialQ::Zero);
+    // Re-gridding keeps the learner's start rule.
+    assert_eq!(regrid(&s, 25.0).unwrap().learning.initial_q, InitialQ::Zero);
 }
 
 #[test]

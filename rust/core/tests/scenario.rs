@@ -3,7 +3,7 @@
 
 use proptest::prelude::*;
 use serde_json::{json, Value};
-use sixaxis_core::scenario::{Scenario, BUILTIN_NAMES};
+use sixaxis_core::scenario::{InitialQ, Scenario, BUILTIN_NAMES};
 use sixaxis_core::Error;
 
 fn base() -> Value {
@@ -260,6 +260,28 @@ fn planning_mode_and_nd_rule_are_validated() {
         v["planning"]["mode"] = json!(mode);
         assert_eq!(parse(&v).unwrap().planning.mode.name(), mode);
     }
+}
+
+#[test]
+fn initial_q_rule_is_validated() {
+    for rule in [InitialQ::Zero, InitialQ::Distance] {
+        let mut v = base();
+        v["learning"]["initial_q"] = json!(rule.name());
+        assert_eq!(parse(&v).unwrap().learning.initial_q, rule);
+    }
+    // Absent: the paper's Q = 0.
+    assert_eq!(parse(&base()).unwrap().learning.initial_q, InitialQ::Zero);
+    let mut v = base();
+    v["learning"]["initial_q"] = json!("optimistic");
+    let e = parse(&v).unwrap_err().to_string();
+    assert!(
+        e.contains("`learning.initial_q` = optimistic: must be one of zero, distance"),
+        "{e}"
+    );
+    let mut v = base();
+    v["learning"]["initial_q"] = json!(0);
+    let e = parse(&v).unwrap_err().to_string();
+    assert!(e.contains("scenario could not be parsed"), "{e}");
 }
 
 #[test]

@@ -70,6 +70,7 @@ pub fn train_request(
     detour: Option<&Bound<'_, PyAny>>,
     distance: Option<&Bound<'_, PyAny>>,
     max_steps_per_episode: Option<&Bound<'_, PyAny>>,
+    initial_q: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<TrainRequest> {
     // `episodes="auto"`: train until the greedy path settles (the core's rule).
     let auto = match episodes {
@@ -89,7 +90,30 @@ pub fn train_request(
         detour: bool_kw(py, "detour", detour)?,
         distance: bool_kw(py, "distance", distance)?,
         max_steps_per_episode: int_kw(py, MAX_STEPS, max_steps_per_episode)?,
+        initial_q: str_kw(
+            py,
+            "initial_q",
+            initial_q,
+            "must be \"zero\", \"distance\" or None",
+        )?,
     })
+}
+
+/// A string keyword (the core checks the name), or `None`; anything else is rejected with
+/// `reason`.
+pub fn str_kw(
+    py: Python<'_>,
+    name: &str,
+    obj: Option<&Bound<'_, PyAny>>,
+    reason: &str,
+) -> PyResult<Option<String>> {
+    match obj.filter(|o| !o.is_none()) {
+        None => Ok(None),
+        Some(o) => match o.cast::<PyString>() {
+            Ok(t) => Ok(Some(t.to_string())),
+            Err(_) => Err(invalid_argument(py, name, repr(o), reason)),
+        },
+    }
 }
 
 /// [`int_kw`], then checked against its domain (for keywords no core request resolves).

@@ -5,7 +5,7 @@ use std::sync::Mutex;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{PyString, PyTuple};
 use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable};
 use sixaxis_core::{Cell, GridWorld, Scenario};
 
@@ -199,7 +199,10 @@ fn q_from_array(
 /// same scenario, seed, episodes and assist, path and Q-table values are identical.
 /// Keyword arguments left as ``None`` take the scenario's ``learning`` values; ``assist``
 /// switches eqs. 9 and 10 together, ``detour`` (eq. 9) and ``distance`` (eq. 10) each on its
-/// own (after ``assist``). ``progress(episodes_done)`` is called about 100 times; an
+/// own (after ``assist``). ``initial_q`` is how the Q-table starts: ``"zero"`` (the
+/// paper's), ``"distance"`` (an optimistic bound from the Manhattan distance to the target,
+/// see docs/SCENARIOS.md), or a ``(num_states, 6)`` array to resume from (default the
+/// scenario's ``learning.initial_q``). ``progress(episodes_done)`` is called about 100 times; an
 /// exception it raises is re-raised after training. The GIL is released while learning.
 #[pyfunction]
 #[pyo3(signature = (scenario=None, *, episodes=None, episode_cap=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
@@ -215,10 +218,15 @@ pub fn train(
     distance: Option<&Bound<'_, PyAny>>,
     max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     extra_obstacles: Option<&Bound<'_, PyAny>>,
-    initial_q: Option<PyReadonlyArray2<'_, f64>>,
+    initial_q: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
+    // `initial_q`: a rule by name (the request resolves it) or a table to start from.
+    let (rule, table) = match initial_q.filter(|o| !o.is_none()) {
+        Some(o) if o.is_instance_of::<PyString>() => (Some(o), None),
+        other => (None, other),
+    };
     let req = train_request(
         py,
         episodes,
@@ -228,10 +236,23 @@ pub fn train(
         detour,
         distance,
         max_steps_per_episode,
+        rule,
     )?;
     let opts = run_attached(py, || req.resolve(&s))?;
     let world = world_of(py, &s, extra_obstacles)?;
-    let q0 = initial_q.map(|a| q_from_array(py, a, &world)).transpose()?;
+    let q0 = table
+        .map(|o| {
+            let a = o.extract::<PyReadonlyArray2<'_, f64>>().map_err(|_| {
+                invalid_argument(
+                    py,
+                    "initial_q",
+                    repr(o),
+                    "must be \"zero\", \"distance\", a (num_states, 6) float64 array or None",
+                )
+            })?;
+            q_from_array(py, a, &world)
+        })
+        .transpose()?;
     let cb_error: Mutex<Option<PyErr>> = Mutex::new(None);
     let result = {
         let world = &world;
