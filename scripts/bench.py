@@ -176,8 +176,7 @@ def sb3_section(data: dict) -> list[str]:
         "actions, SB3 semantics (immediate reset, one info dict per env). Measured by",
         f"`python scripts/bench_sb3.py --num-envs {' '.join(map(str, data['config']['num_envs']))}"
         f" --ppo-steps {data['config']['ppo_steps']}` ({system['cpus']} cores, load average"
-        f" {system['load_average_at_start']:.1f} at the start: other jobs shared the machine, so"
-        " the absolute figures are low; the ratios are what to read).",
+        f" {system['load_average_at_start']:.1f} at the start).",
         "",
         "| N | SixAxisVecEnv steps/s | DummyVecEnv steps/s | SubprocVecEnv steps/s | vs Dummy |"
         " vs Subproc |",
@@ -195,8 +194,9 @@ def sb3_section(data: dict) -> list[str]:
         lines += [
             "",
             "PPO (`MlpPolicy`, n_steps 256, batch 256, ent_coef 0.01, "
-            f"seed {data['config']['seed']}, CPU), {data['config']['ppo_steps']:,} timesteps "
-            f"on {n} envs, total wall time:",
+            f"seed {data['config']['seed']}, CPU, "
+            f"{data['config'].get('torch_threads', 1)} torch thread), "
+            f"{data['config']['ppo_steps']:,} timesteps on {n} envs, total wall time:",
             "",
             "| VecEnv | seconds |",
             "|---|---|",

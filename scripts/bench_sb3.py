@@ -45,6 +45,9 @@ def parse_args() -> argparse.Namespace:
     p.add_argument("--ppo-envs", type=int, default=8, help="envs of the PPO runs")
     p.add_argument("--ppo-steps", type=int, default=50_000, help="PPO timesteps per run")
     p.add_argument("--max-episode-steps", type=int, default=200, help="step cap per episode")
+    p.add_argument(
+        "--torch-threads", type=int, default=1, help="torch threads of PPO (fixed for fair timing)"
+    )
     p.add_argument("--out", default=None, help="write the JSON here too")
     p.add_argument("--quick", action="store_true", help="short runs (smoke test, noisy figures)")
     args = p.parse_args()
@@ -86,7 +89,10 @@ def steps_per_s(venv, steps: int, seed: int, repeats: int) -> float:
 
 
 def ppo_seconds(kind: str, args: argparse.Namespace) -> dict:
+    import torch
     from stable_baselines3 import PPO
+
+    torch.set_num_threads(args.torch_threads)
 
     venv = make_vec(kind, args.ppo_envs, args.seed, args.max_episode_steps)
     model = PPO(
@@ -98,11 +104,16 @@ def ppo_seconds(kind: str, args: argparse.Namespace) -> dict:
         seed=args.seed,
         device="cpu",
     )
+    load = os.getloadavg()[0]
     t = time.perf_counter()
     model.learn(total_timesteps=args.ppo_steps)
     seconds = time.perf_counter() - t
     venv.close()
-    return {"seconds": round(seconds, 2), "timesteps": int(model.num_timesteps)}
+    return {
+        "seconds": round(seconds, 2),
+        "timesteps": int(model.num_timesteps),
+        "load_average_at_start": round(load, 2),
+    }
 
 
 def main() -> None:
