@@ -129,9 +129,10 @@ enum Command {
         #[command(flatten)]
         out: OutArgs,
     },
-    /// The same physical world at another cell size: obstacle boxes and safe distances kept
-    /// in mm, start and target at the same points (an error if they are not cell centres of
-    /// the new grid). Prints the new scenario's JSON.
+    /// The same physical world at another cell size (prints the new scenario's JSON)
+    ///
+    /// Obstacle boxes and safe distances are kept in mm, start and target at the same points
+    /// (an error if they are not cell centres of the new grid).
     ///
     /// Example: sixaxis regrid --scenario paper_simple --cell-mm 50 --out simple_50mm.json
     Regrid {
