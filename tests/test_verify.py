@@ -38,6 +38,20 @@ def test_a_capsules_plan_has_no_contact_in_mujoco():
     assert r.min_distance_mm > 0.0 and r.contacts == 0
 
 
+def test_a_regridded_world_is_verified_against_its_boxes():
+    """A physical world (the paper's cubes as boxes in mm, 50 mm cells): MuJoCo measures the
+    boxes, and eq. 11 to the boxes' centres equals the planner's own figure."""
+    s = sixaxis_avoid.Scenario("paper_simple").regrid(50)
+    p = sixaxis_avoid.plan(s, seed=0, initial_q="distance")
+    assert p.success and p.obstacles == []
+    r = verify.verify_plan(p, s)
+    assert r.eq11_cells == pytest.approx(p.min_centre_clearance_cells, abs=1e-9)
+    assert r.eq11_cells > p.arm_safe_distance
+    # The same cubes as at 100 mm: the centre line reaches a cube's surface, so the 30 mm
+    # capsules overlap it.
+    assert r.centre_line_mm < 1.0 and r.contacts > 0
+
+
 def test_interpolation_matches_the_planner():
     q0 = np.array([0.9 * np.pi, 0, 0, 0, 0, 0])
     q1 = np.array([-0.9 * np.pi, 0, 0, 0, 0, 1.0])

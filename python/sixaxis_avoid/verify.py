@@ -129,10 +129,13 @@ def verify_plan(
 ) -> VerifyReport:
     """Replay ``plan`` (a ``PlanResult``, or the dict / JSON of ``sixaxis plan``) in MuJoCo.
 
-    ``scenario`` gives the arm (default: the paper's); the obstacles are always the plan's
-    own (``plan.obstacles``, those of the scenario it was made for, not the points added by
-    re-planning). ``link_radius_mm`` overrides the capsule radius (default: the scenario's
-    capsules model, else the export's default of 30 mm).
+    ``scenario`` gives the arm (default: the paper's) and the obstacle boxes of a physical
+    world (``obstacle_boxes_mm``); the obstacle cells are always the plan's own
+    (``plan.obstacles``, those of the scenario it was made for, not the points added by
+    re-planning). Eq. 11 is measured to the cells' centres and to the centres of boxes whose
+    distances are taken to the centre (the paper's cubes re-gridded). ``link_radius_mm``
+    overrides the capsule radius (default: the scenario's capsules model, else the export's
+    default of 30 mm).
     """
     mujoco = require("mujoco", "verify_plan")
     p = _plan_dict(plan)
@@ -161,6 +164,14 @@ def verify_plan(
     radius_mm = float(model.geom_size[arm[0], 0]) * 1000.0
     arm_kin = _core.Arm.from_scenario(s)
     centres = np.asarray(obstacles, dtype=np.float64).reshape(-1, 3) * cell_mm
+    boxes = json.loads(s.to_json()).get("obstacle_boxes_mm", [])
+    box_centres = [
+        (np.asarray(b["min_mm"], dtype=np.float64) + np.asarray(b["max_mm"], dtype=np.float64)) / 2
+        for b in boxes
+        if b.get("distance_to") == "centre"
+    ]
+    if box_centres:
+        centres = np.vstack([centres, np.asarray(box_centres)])
     path = [tuple(int(v) for v in c) for c in p["path"]]
     fromto = np.zeros(6)
     moves = []
