@@ -128,8 +128,10 @@ def main() -> None:
 
 
 def system_info(**versions: str) -> dict:
-    """Python, platform, CPUs, load average and package versions of a benchmark run."""
+    """Machine (the core's description), Python, platform, CPUs, load average and package
+    versions of a benchmark run."""
     return {
+        "machine": sixaxis_avoid._core.machine(),
         "python": sys.version.split()[0],
         "platform": platform.platform(),
         "cpus": os.cpu_count(),

@@ -354,14 +354,10 @@ def run_study(
 
 
 def machine() -> str:
-    """The CPU, core count and OS (the core's description when it has one)."""
+    """The CPU, core count and OS: the core's one description (``_core.machine``)."""
     from sixaxis_avoid import _core
 
-    describe = getattr(_core, "machine", None)
-    if describe is not None:
-        return describe()
-    cpu = platform.processor() or platform.machine()
-    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.machine()}"
+    return _core.machine()
 
 
 def versions() -> dict[str, str]:
