@@ -19,6 +19,21 @@ def test_frames_follow_the_plan(paper_simple_plan):
     np.testing.assert_array_equal(frames[-1], frames[-2])
 
 
+def test_frames_draw_the_plans_boxes():
+    """A physical world's plan: its ``obstacle_boxes_mm`` are drawn; a plan JSON without the
+    key (older files) falls back to the scenario's boxes."""
+    s = sixaxis_avoid.Scenario("paper_simple").regrid(50)
+    plan = sixaxis_avoid.plan(s, seed=0, initial_q="distance")
+    kw = {"frames_per_move": 1, "size": 200, "hold_frames": 0}
+    boxed = animate.plan_frames(plan, s, **kw)
+    d = plan.to_dict()
+    d.pop("obstacle_boxes_mm")
+    np.testing.assert_array_equal(animate.plan_frames(d, s, **kw)[0], boxed[0])
+    d["obstacle_boxes_mm"] = []
+    free = animate.plan_frames(d, s, **kw)
+    assert np.any(free[0] != boxed[0], axis=-1).sum() > 0.05 * free[0].shape[0] * free[0].shape[1]
+
+
 def test_gif_and_mp4_are_written_and_readable(paper_simple_plan, tmp_path):
     gif = animate.animate_plan(
         paper_simple_plan, tmp_path / "a.gif", "paper_simple", frames_per_move=3

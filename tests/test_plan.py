@@ -54,6 +54,7 @@ def test_plan_paper_simple_succeeds_without_replans(simple_plan):
     assert r.arm_safe_distance == pytest.approx(0.76)
     assert r.interpolation_steps == 50
     assert r.obstacles == sa.Scenario("paper_simple").obstacles
+    assert r.obstacle_boxes_mm == [] and r.to_dict()["obstacle_boxes_mm"] == []
     assert r.clearance_model == {"kind": "centres"}
     assert len(r.rounds) == 1 and r.rounds[0]["blocked_at"] is None
     assert r.rounds[0]["path"] == [list(c) for c in r.path]
@@ -73,6 +74,26 @@ def test_to_dict_equals_cli_json(simple_plan, sixaxis_bin):
     assert set(ours) == set(cli)
     assert without_wall_times(ours) == without_wall_times(cli)
     assert json.loads(simple_plan.to_json()) == ours
+
+
+def test_plan_of_a_physical_world_lists_its_boxes(sixaxis_bin, tmp_path):
+    """paper_simple re-gridded to 50 mm: the plan result carries the scenario's boxes (its
+    obstacle cells are empty), the same in the CLI's JSON as in Python."""
+    s = sa.Scenario("paper_simple").regrid(50)
+    boxes = s.obstacle_boxes_mm
+    assert len(boxes) == 19 and boxes == s.to_dict()["obstacle_boxes_mm"]
+    r = sa.plan(s, seed=0, initial_q="distance")
+    assert r.success and r.obstacles == []
+    assert r.obstacle_boxes_mm == boxes
+    ours = r.to_dict()
+    assert ours["obstacle_boxes_mm"] == boxes
+    scenario_file = tmp_path / "s50.json"
+    scenario_file.write_text(s.to_json())
+    cmd = [str(sixaxis_bin), "plan", "--scenario", str(scenario_file), "--seed", "0"]
+    cmd += ["--initial-q", "distance", "-q"]
+    cli = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+    assert cli["obstacle_boxes_mm"] == ours["obstacle_boxes_mm"]
+    assert without_wall_times(cli) == without_wall_times(ours)
 
 
 def test_plan_replan_clutter_needs_a_replan(clutter_plan):

@@ -53,12 +53,16 @@ def plan_frames(
     """The frames (``uint8`` ``(H, W, 3)``) of a plan's motion: ``frames_per_move`` per move
     (evenly spaced over the move's interpolation), the last pose held ``hold_frames`` frames.
     ``scenario`` gives the arm and the scene (default: the paper's); the obstacles drawn are
-    the plan's own."""
+    the plan's own (its cells and, when the plan lists them, its ``obstacle_boxes_mm``)."""
     frames_per_move = check_positive_int("frames_per_move", frames_per_move)
     check_choice("renderer", renderer, RENDERERS)
     poses, path, _ = _poses_and_path(plan)
     s = scenario if isinstance(scenario, _core.Scenario) else _core.Scenario(scenario)
-    s = s.replace(obstacles=[tuple(c) for c in _plan_dict(plan)["obstacles"]])
+    p = _plan_dict(plan)
+    changes: dict[str, Any] = {"obstacles": [tuple(c) for c in p["obstacles"]]}
+    if "obstacle_boxes_mm" in p:  # absent from plans written before the key existed
+        changes["obstacle_boxes_mm"] = p["obstacle_boxes_mm"]
+    s = s.replace(**changes)
     motion = [poses[0]]
     for k in range(len(poses) - 1):
         motion.extend(interpolate(poses[k], poses[k + 1], frames_per_move)[1:])
@@ -69,9 +73,15 @@ def plan_frames(
 
 
 def _numpy_drawer(s: _core.Scenario, size: int):
-    from sixaxis_avoid.render import IsoRenderer
+    from sixaxis_avoid.render import IsoRenderer, obstacle_boxes_cells
 
-    iso = IsoRenderer(s.bounds, s.obstacles, size=size, include_origin=True)
+    iso = IsoRenderer(
+        s.bounds,
+        s.obstacles,
+        size=size,
+        include_origin=True,
+        boxes_cells=obstacle_boxes_cells(s),
+    )
     arm = _core.Arm.from_scenario(s)
 
     def draw(q: np.ndarray, path: Sequence[tuple[int, int, int]]) -> np.ndarray:

@@ -1,9 +1,10 @@
 """Rendering of the grid world: an isometric view drawn with NumPy only.
 
 The static scene (floor grid, bounds box, obstacles, cells the arm cannot reach) is drawn
-once into a background image with shaded cube sprites in painter's order; each frame then
-copies a cached layer holding the path so far (extended incrementally) and draws the
-target, the terminal and optionally the arm's polyline on top. Dynamic elements are drawn
+once into a background image with shaded cube sprites in painter's order (a scenario's
+``obstacle_boxes_mm`` as shaded boxes of the same style, in cells: mm / ``cell_mm``); each
+frame then copies a cached layer holding the path so far (extended incrementally) and draws
+the target, the terminal and optionally the arm's polyline on top. Dynamic elements are drawn
 over the obstacles on purpose, so that the terminal is never hidden.
 
 ``human`` mode shows the same frames in a Matplotlib window; without a display (Linux with
@@ -41,14 +42,22 @@ _FACE_SHADE = {1: 1.0, 2: 0.78, 3: 0.62}  # top, +x face, +y face
 
 
 class _Sprite:
-    """A shaded cube of edge ``edge`` cells, rasterised once: pixel offsets and colours."""
+    """A shaded cube of edge ``edge`` cells (or a box of edges ``(ex, ey, ez)`` cells),
+    rasterised once: pixel offsets and colours."""
 
-    def __init__(self, project_rel, edge: float, colour: Sequence[int], alpha: float = 1.0):
-        h = edge / 2.0
+    def __init__(
+        self,
+        project_rel,
+        edge: float | Sequence[float],
+        colour: Sequence[int],
+        alpha: float = 1.0,
+    ):
+        ex, ey, ez = (edge, edge, edge) if np.isscalar(edge) else edge
+        a, b, h = ex / 2.0, ey / 2.0, ez / 2.0
         faces = {
-            1: [(-h, -h, h), (h, -h, h), (h, h, h), (-h, h, h)],  # top (+z)
-            2: [(h, -h, -h), (h, h, -h), (h, h, h), (h, -h, h)],  # +x
-            3: [(-h, h, -h), (h, h, -h), (h, h, h), (-h, h, h)],  # +y
+            1: [(-a, -b, h), (a, -b, h), (a, b, h), (-a, b, h)],  # top (+z)
+            2: [(a, -b, -h), (a, b, -h), (a, b, h), (a, -b, h)],  # +x
+            3: [(-a, b, -h), (a, b, -h), (a, b, h), (-a, b, h)],  # +y
         }
         polys = {k: np.array([project_rel(*p) for p in v]) for k, v in faces.items()}
         allp = np.concatenate(list(polys.values()))
@@ -138,7 +147,10 @@ class IsoRenderer:
         unreachable: Sequence[Cell] = (),
         size: int = 512,
         include_origin: bool = False,
+        boxes_cells: Sequence[tuple[Sequence[float], Sequence[float]]] = (),
     ):
+        """``boxes_cells``: obstacles as axis-aligned boxes ``(lowest corner, highest corner)``
+        in cell coordinates (see :func:`obstacle_boxes_cells`), drawn like the cubes."""
         lo = np.asarray(bounds[0], dtype=np.float64)
         hi = np.asarray(bounds[1], dtype=np.float64)
         self._lo, self._hi = lo, hi
@@ -180,8 +192,16 @@ class IsoRenderer:
         bg = np.empty((self.height, self.width, 3), dtype=np.uint8)
         bg[:] = BACKGROUND
         self._draw_floor(bg)
-        items = [(c, self._obstacle) for c in obstacles]
+        items: list[tuple[Any, _Sprite]] = [(c, self._obstacle) for c in obstacles]
         items += [(c, self._unreachable) for c in unreachable]
+        box_sprites: dict[tuple[float, ...], _Sprite] = {}
+        for b_lo, b_hi in boxes_cells:
+            b_lo = np.asarray(b_lo, dtype=np.float64)
+            b_hi = np.asarray(b_hi, dtype=np.float64)
+            edges = tuple(round(float(e), 9) for e in b_hi - b_lo)
+            if edges not in box_sprites:
+                box_sprites[edges] = _Sprite(self._project_rel, edges, OBSTACLE, alpha=0.9)
+            items.append((tuple(float(v) for v in (b_lo + b_hi) / 2.0), box_sprites[edges]))
         items.sort(key=lambda it: (it[0][0] + it[0][1] + it[0][2], it[0][2]))
         for c, sprite in items:
             u, v = self.project(c)
@@ -286,6 +306,19 @@ class IsoRenderer:
         return img
 
 
+def obstacle_boxes_cells(scenario: Any) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A scenario's ``obstacle_boxes_mm`` as ``(lowest corner, highest corner)`` pairs in
+    cell coordinates (mm / ``cell_mm``; the centre of cell ``c`` is at ``c``)."""
+    cell_mm = float(scenario.cell_mm)
+    return [
+        (
+            np.asarray(b["min_mm"], dtype=np.float64) / cell_mm,
+            np.asarray(b["max_mm"], dtype=np.float64) / cell_mm,
+        )
+        for b in scenario.obstacle_boxes_mm
+    ]
+
+
 class SceneRenderer:
     """Frames of one scenario: the :class:`IsoRenderer` scene, and with ``render_arm`` the
     arm's polyline in the first clear IK pose at the terminal's cell (none if no clear pose)."""
@@ -300,7 +333,12 @@ class SceneRenderer:
         self.scenario = scenario
         self.render_arm = render_arm
         self.iso = IsoRenderer(
-            scenario.bounds, scenario.obstacles, unreachable, size=size, include_origin=render_arm
+            scenario.bounds,
+            scenario.obstacles,
+            unreachable,
+            size=size,
+            include_origin=render_arm,
+            boxes_cells=obstacle_boxes_cells(scenario),
         )
 
     def frame(self, path: Sequence[Cell], terminal: Cell, target: Cell) -> np.ndarray:

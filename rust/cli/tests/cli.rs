@@ -208,6 +208,7 @@ fn plan_json_contract() {
         "arm_safe_distance",
         "interpolation_steps",
         "obstacles",
+        "obstacle_boxes_mm",
         "path",
         "poses_rad",
         "replans",
@@ -222,6 +223,11 @@ fn plan_json_contract() {
     assert_eq!(v["arm_safe_distance"], 0.76);
     assert_eq!(v["failure"], Value::Null);
     assert_eq!(v["obstacles"].as_array().unwrap().len(), 19);
+    assert_eq!(
+        v["obstacle_boxes_mm"],
+        serde_json::json!([]),
+        "a world of cells only"
+    );
     assert_eq!(
         v["poses_rad"].as_array().unwrap().len(),
         v["path"].as_array().unwrap().len()

@@ -47,7 +47,7 @@ use crate::error::{Error, Result};
 use crate::grid::GridWorld;
 use crate::planner::{PosePlan, PosePlanner};
 use crate::qlearning::{train, TrainOptions};
-use crate::scenario::{Cell, ClearanceModel, PoseSearchMode, Scenario};
+use crate::scenario::{Cell, ClearanceModel, ObstacleBox, PoseSearchMode, Scenario};
 
 /// Options of one Algorithm 2 run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -248,6 +248,9 @@ pub struct PlanResult {
     pub target: Cell,
     /// The scenario's own obstacles (before any were added).
     pub obstacles: Vec<Cell>,
+    /// The scenario's obstacles as boxes in mm (its `obstacle_boxes_mm`; empty for a world
+    /// of cells only).
+    pub obstacle_boxes_mm: Vec<ObstacleBox>,
     /// The final terminal path (cells, start to target); empty on failure before any path.
     pub path: Vec<Cell>,
     /// One pose per path point, start included, radians.
@@ -329,6 +332,7 @@ pub fn plan(
         start: scenario.start,
         target: scenario.target,
         obstacles: scenario.obstacles.clone(),
+        obstacle_boxes_mm: scenario.obstacle_boxes_mm.clone(),
         path: Vec::new(),
         poses_rad: Vec::new(),
         orientations_rpy_deg: Vec::new(),

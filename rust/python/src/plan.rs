@@ -128,6 +128,13 @@ impl PyPlanResult {
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
         tuples(py, &self.inner.obstacles)
     }
+    /// The scenario's obstacles as boxes in mm, as in the scenario file: a list of dicts
+    /// ``{"min_mm": [x, y, z], "max_mm": [x, y, z]}`` (plus ``"distance_to": "centre"`` for
+    /// centre-measured boxes); empty for a world of cells only.
+    #[getter]
+    fn obstacle_boxes_mm<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &to_value!(py, &self.inner.obstacle_boxes_mm)?)
+    }
     /// Edge of a cell, mm.
     #[getter]
     fn cell_mm(&self) -> f64 {

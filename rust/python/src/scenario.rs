@@ -245,6 +245,15 @@ impl PyScenario {
             .map(|c| cell_tuple(py, *c))
             .collect()
     }
+    /// Obstacles as axis-aligned boxes in mm, as in the scenario file: a list of dicts
+    /// ``{"min_mm": [x, y, z], "max_mm": [x, y, z]}`` (plus ``"distance_to": "centre"`` for
+    /// centre-measured boxes); empty for a world of cells only.
+    #[getter]
+    fn obstacle_boxes_mm<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(&self.inner.obstacle_boxes_mm)
+            .map_err(|e| to_py(py, Error::ScenarioParse(e.to_string())))?;
+        json_to_py(py, &v)
+    }
     /// d_s (eq. 5), cells.
     #[getter]
     fn terminal_safe_distance(&self) -> f64 {
