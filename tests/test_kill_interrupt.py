@@ -1,5 +1,5 @@
-"""SIGKILL at random moments of every file write of the CLI leaves the old file or the new
-one, never a partial; Ctrl-C (SIGINT) during train, plan and reproduce exits with code 130
+"""SIGKILL at random moments of every file write of the CLI (and of a benchmark study's
+result files) leaves the old file or the new one, never a partial; Ctrl-C (SIGINT) during train, plan and reproduce exits with code 130
 quickly and writes nothing.
 
 KILL_ROUNDS (default 12 per output, the CI run) sets how many kills each output gets:
@@ -64,6 +64,37 @@ def test_sigkill_during_out_write(sixaxis_bin, tmp_path):
     cmd = [str(sixaxis_bin), "train", "--scenario", "paper_simple", "--episodes", "3000"]
     cmd += ["--quiet", "--out", str(out)]
     counts = _kill_loop(cmd, [out], _json_ok)
+    print(f"SIGKILL rounds: {counts}")
+    assert counts["old"] + counts["new"] == ROUNDS
+
+
+BENCH_WRITER = """
+import sys
+from sixaxis_avoid.benchmark import load_suite, plan_runs
+from sixaxis_avoid.benchmark.runner import write_run
+spec = plan_runs(load_suite("quick"), ["bfs"], seeds=[0])[0]
+record = {"spec": spec, "result": {"curve": list(range(200_000))}}
+for _ in range(20):
+    write_run(sys.argv[1], record)
+"""
+
+
+def test_sigkill_during_benchmark_result_write(tmp_path):
+    """A benchmark study's per-run result file (runner.write_run) is whole after a SIGKILL."""
+    import sys
+
+    from sixaxis_avoid.benchmark import load_suite, plan_runs
+    from sixaxis_avoid.benchmark.runner import run_path
+
+    spec = plan_runs(load_suite("quick"), ["bfs"], seeds=[0])[0]
+    target = run_path(tmp_path, spec)
+    target.parent.mkdir(parents=True)
+    cmd = [sys.executable, "-c", BENCH_WRITER, str(tmp_path)]
+
+    def whole(p: Path) -> None:
+        assert len(json.loads(p.read_text())["result"]["curve"]) == 200_000
+
+    counts = _kill_loop(cmd, [target], whole)
     print(f"SIGKILL rounds: {counts}")
     assert counts["old"] + counts["new"] == ROUNDS
 
