@@ -77,14 +77,18 @@ def suggest(trial: Any, learner: str) -> dict[str, Any]:
         "max_episode_steps": c("max_episode_steps", EPISODE_CAPS),
     }
     if learner in ("dqn", "qrdqn"):
+        # Gradient steps per env step (the replay ratio) at most 1/2, the defaults' ratio, so
+        # no draw costs more than the defaults (the study has to fit the machine).
+        gradient_steps = c("gradient_steps", [1, 2, 4])
+        replay_ratio = c("replay_ratio", [0.0625, 0.125, 0.25, 0.5])
         hp = {
             **common,
             "batch_size": c("batch_size", [32, 64, 128, 256]),
             "buffer_size": c("buffer_size", [10_000, 50_000, 100_000]),
             "learning_starts": c("learning_starts", [0, 500, 1000, 5000]),
             "target_update_interval": c("target_update_interval", [100, 500, 1000, 5000]),
-            "train_freq": c("train_freq", [1, 4, 8, 16]),
-            "gradient_steps": c("gradient_steps", [1, 2, 4, 8]),
+            "train_freq": round(gradient_steps / replay_ratio),
+            "gradient_steps": gradient_steps,
             "exploration_fraction": f("exploration_fraction", 0.05, 0.5),
             "exploration_final_eps": f("exploration_final_eps", 0.01, 0.2),
         }
