@@ -187,6 +187,40 @@ def test_curve_on_is_a_step_function():
     assert got.tolist() == [0.0, 0.5, 0.5, 1.0, 1.0]
 
 
+def test_plateau_reads_each_run_at_a_quarter_half_and_end():
+    from sixaxis_avoid.benchmark.report import plateau
+
+    def run(learner, curve):
+        pts = [{"env_steps": x, "score": y} for x, y in curve]
+        return {"spec": {"learner": learner}, "result": {"curve": pts}}
+
+    runs = [
+        run("flat", [(10, 1.0), (50, 1.0), (100, 1.0)]),  # optimal from the start
+        run("late", [(10, 0.0), (50, 0.0), (80, 0.5), (100, 1.0)]),  # rises after half
+        run("late", [(10, 0.0), (30, 1.0), (100, 1.0)]),  # flat after a quarter
+    ]
+    got = plateau({"learners": ["flat", "late"], "runs": runs})
+    assert got["flat"] == {
+        "runs": 1, "quarter": 1.0, "half": 1.0, "end": 1.0, "changed_late": 0.0,
+    }  # fmt: skip
+    assert got["late"]["runs"] == 2
+    assert got["late"]["quarter"] == pytest.approx(0.0)  # 25 steps: both still at 0
+    assert got["late"]["half"] == pytest.approx(0.5)  # 50 steps: 0 and 1
+    assert got["late"]["end"] == pytest.approx(1.0)
+    assert got["late"]["changed_late"] == pytest.approx(0.5)
+
+
+def test_dqn_search_space_keeps_the_replay_ratio_at_most_one_half():
+    import optuna
+
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
+    for learner in ("dqn", "qrdqn"):
+        for _ in range(40):
+            hp = hpmod.suggest(study.ask(), learner)
+            assert hp["gradient_steps"] / hp["train_freq"] <= 0.5
+            assert hp["gradient_steps"] >= 1 and hp["train_freq"] >= 2
+
+
 # -- hyperparameters and tuning -----------------------------------------------------------------
 
 

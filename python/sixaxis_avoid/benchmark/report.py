@@ -248,6 +248,79 @@ def hyperparam_section(a: dict[str, Any]) -> list[str]:
     return out
 
 
+def plateau(a: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Per learner, whether the curves had flattened by the end of the budget: the mean score
+    at a quarter, half and all of each run's env steps, and the fraction of runs whose score
+    still changed in the second half of their budget."""
+    out: dict[str, dict[str, Any]] = {}
+    for lr in a["learners"]:
+        at: list[np.ndarray] = []
+        for r in a["runs"]:
+            if r["spec"]["learner"] != lr or not r["result"]["curve"]:
+                continue
+            end = max(p["env_steps"] for p in r["result"]["curve"])
+            q, h, e = stats.curve_on(np.array([end / 4, end / 2, end]), r["result"]["curve"])
+            # Still changing: a checkpoint after end/2 differs from the score at end/2.
+            late = [p["score"] for p in r["result"]["curve"] if p["env_steps"] > end / 2]
+            changed = any(abs(v - h) > 1e-12 for v in late)
+            at.append(np.array([q, h, e, float(changed)]))
+        if at:
+            m = np.mean(at, axis=0)
+            out[lr] = {
+                "runs": len(at),
+                "quarter": float(m[0]),
+                "half": float(m[1]),
+                "end": float(m[2]),
+                "changed_late": float(m[3]),
+            }
+    return out
+
+
+def plateau_section(a: dict[str, Any]) -> list[str]:
+    rows = plateau(a)
+    return [
+        "## Did the curves plateau?",
+        "",
+        "Mean final-path score over a learner's runs at a quarter, half and all of each run's "
+        "env steps, and the fraction of runs whose score still changed in the second half of "
+        "their budget. A learner whose score still rises from half to full budget, or changes "
+        "late in many runs, has not plateaued: its figures are a lower bound on what it can do "
+        "with more samples (the cluster command under *How to run* scales every budget).",
+        "",
+        "| learner | runs | score at 1/4 | at 1/2 | at end | runs still changing after 1/2 |",
+        "|---|---|---|---|---|---|",
+        *[
+            f"| {lr} | {v['runs']} | {v['quarter']:.3f} | {v['half']:.3f} | {v['end']:.3f} | "
+            f"{v['changed_late']:.2f} |"
+            for lr, v in rows.items()
+        ],
+        "",
+    ]
+
+
+def run_commands(a: dict[str, Any]) -> list[str]:
+    """The commands that made this study: the tuning runs recorded in the hyperparameter
+    file, the study's own command, and a cluster-sized variant of it."""
+    data = hpmod.load(a["manifest"]["suite"].get("hyperparams", "v1"))
+    tune_cmds: list[str] = []
+    for entry in data.get("learners", {}).values():
+        cmd = (entry.get("tuning") or {}).get("command")
+        if cmd and cmd not in tune_cmds:
+            tune_cmds.append(cmd)
+    suite = a["manifest"]["suite"]["name"]
+    return [
+        "```bash",
+        "bash scripts/setup.sh && source .venv/bin/activate   # or: pip install -e '.[bench]'",
+        *(tune_cmds or [f"python -m sixaxis_avoid.benchmark tune --suite {suite}"]),
+        a["manifest"]["command"],
+        f"python -m sixaxis_avoid.benchmark report --results results/bench/{suite}",
+        "# a cluster-sized run: join a Ray cluster, 20 seeds, every deep budget x10",
+        f"python -m sixaxis_avoid.benchmark run --suite {suite} --address auto --seeds 20 "
+        "--budget-scale 10 --out-dir results/bench/cluster",
+        "```",
+    ]
+
+
 def table(rows: dict[str, dict[str, Any]], label: str) -> list[str]:
     head = [
         label,
@@ -385,6 +458,7 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
         "|---|" + "---|" * len(poi_learners),
         *poi_rows,
         "",
+        *plateau_section(a),
         "## Per learner (all tasks)",
         "",
         *table({"all": a["per"]}, "tasks"),
@@ -429,14 +503,7 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
         "",
         "## How to run",
         "",
-        "```bash",
-        "pip install -e '.[bench]'   # or: bash scripts/setup.sh",
-        "python -m sixaxis_avoid.benchmark tune --suite v1 --trials 10 --budget-scale 0.5",
-        "python -m sixaxis_avoid.benchmark run --suite v1 --budget-scale 0.5   # local Ray",
-        "python -m sixaxis_avoid.benchmark run --suite v1 --address auto --seeds 20 "
-        "--budget-scale 10   # a cluster",
-        "python -m sixaxis_avoid.benchmark report --results results/bench/v1",
-        "```",
+        *run_commands(a),
         "",
         "A restarted `run` skips the runs whose result file is there (for the same spec).",
         "",
