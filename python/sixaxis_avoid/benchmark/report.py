@@ -427,6 +427,12 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
             for i, lr in enumerate(ranked)
         ],
         "",
+        "Learners use different numbers of env steps (the column above): the tabular learners "
+        "the paper's episode count, the deep learners the suite's budget, BFS none (it reads "
+        "the grid). Compare sample efficiency on the learning curves (score against env "
+        "steps), and check *Did the curves plateau?* before reading a final score as what a "
+        "learner can reach.",
+        "",
         *hyperparam_section(a),
         "## Aggregate scores (rliable)",
         "",
