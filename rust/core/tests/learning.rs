@@ -906,7 +906,16 @@ fn f32_training_is_deterministic_and_takes_half_the_bytes() {
         .zip(v32)
         .all(|(x, y)| x.to_bits() == (*y as f64).to_bits()));
     assert!(v32.iter().filter(|v| **v != 0.0).count() > 100);
-    let c = train(&w, &TrainOptions { seed: 1, ..o.clone() }, None, None).unwrap();
+    let c = train(
+        &w,
+        &TrainOptions {
+            seed: 1,
+            ..o.clone()
+        },
+        None,
+        None,
+    )
+    .unwrap();
     assert_ne!(a.q, c.q);
     // 24 bytes of Q-values per state against 48; the default stays f64.
     let f64_run = train(
@@ -919,8 +928,14 @@ fn f32_training_is_deterministic_and_takes_half_the_bytes() {
         None,
     )
     .unwrap();
-    assert_eq!((a.q.bytes_per_state(), f64_run.q.bytes_per_state()), (24, 48));
-    assert_eq!(TrainOptions::from_scenario(&sc).q_precision, QPrecision::F64);
+    assert_eq!(
+        (a.q.bytes_per_state(), f64_run.q.bytes_per_state()),
+        (24, 48)
+    );
+    assert_eq!(
+        TrainOptions::from_scenario(&sc).q_precision,
+        QPrecision::F64
+    );
     // The f64 learner asked for explicitly is the default learner, bit for bit.
     let mut default = TrainOptions::from_scenario(&sc);
     default.episodes = 2000;
@@ -940,12 +955,21 @@ fn f32_qtable_file_round_trip_is_exact() {
     let header_end = bytes.iter().skip(17).position(|&b| b == b'\n').unwrap() + 18;
     let header = std::str::from_utf8(&bytes[17..header_end]).unwrap();
     assert!(header.contains("\"values\":\"f32\""), "{header}");
-    assert!(header.contains("\"layout\":\"f32 little-endian"), "{header}");
+    assert!(
+        header.contains("\"layout\":\"f32 little-endian"),
+        "{header}"
+    );
     assert_eq!(bytes.len() - header_end, w.num_states() * 6 * 4);
     let back = QTable::load(&path, &w).unwrap();
     assert_eq!(back.precision(), QPrecision::F32);
     assert_eq!(back, q);
-    let bits = |t: &QTable| -> Vec<u32> { t.values_f32().unwrap().iter().map(|v| v.to_bits()).collect() };
+    let bits = |t: &QTable| -> Vec<u32> {
+        t.values_f32()
+            .unwrap()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect()
+    };
     assert_eq!(bits(&back), bits(&q));
     // An f64 table says so too, and is twice the size.
     let q64 = trained(&w, &sc, 50, 0);
@@ -1030,6 +1054,9 @@ fn f32_q_update_stores_the_rounded_f64_update() {
     assert_eq!(q.get(s0, PX), 0.1f32 as f64);
     let t = w.step(s0, PX, None, Assist::on());
     let expect = (0.1f32 as f64) + 0.05 * (t.reward + 0.9 * 0.0 - (0.1f32 as f64));
-    assert_eq!(q_update(&mut q, s0, PX, &t, 0.05, 0.9), expect as f32 as f64);
+    assert_eq!(
+        q_update(&mut q, s0, PX, &t, 0.05, 0.9),
+        expect as f32 as f64
+    );
     assert_eq!(q.row(s0)[PX], expect as f32 as f64);
 }

@@ -172,7 +172,8 @@ fn world_of(
 /// A Q-table as a ``(num_states, 6)`` array of its own dtype (float64 or float32).
 fn q_array<'py>(py: Python<'py>, q: &QTable) -> PyResult<Bound<'py, PyAny>> {
     let shape = (q.num_states(), 6);
-    let bad_shape = |e: numpy::ndarray::ShapeError| invalid_argument(py, "q", "shape", e.to_string());
+    let bad_shape =
+        |e: numpy::ndarray::ShapeError| invalid_argument(py, "q", "shape", e.to_string());
     Ok(match (q.values_f64(), q.values_f32()) {
         (Some(v), _) => Array2::from_shape_vec(shape, v.to_vec())
             .map_err(bad_shape)?
@@ -216,7 +217,12 @@ fn q_from_array(
         ));
     }
     let Some(table) = table else {
-        return Err(invalid_argument(py, name, "array", "every value must be finite"));
+        return Err(invalid_argument(
+            py,
+            name,
+            "array",
+            "every value must be finite",
+        ));
     };
     let n = world.num_states();
     run_attached(py, || match table {
