@@ -11,6 +11,7 @@ text between the ``precision`` markers of docs/PERFORMANCE.md, and every run's f
 
     python scripts/bench_precision.py                      # 3 scenarios, seeds 0..9
     python scripts/bench_precision.py --seeds 20 --no-doc  # print only
+    python scripts/bench_precision.py --no-assist --no-doc --out results/precision_eq5.json
 """
 
 from __future__ import annotations
@@ -32,6 +33,9 @@ def parse_args() -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenarios", nargs="+", default=list(SCENARIOS))
     p.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1")
+    p.add_argument(
+        "--no-assist", action="store_true", help="eq. 5 alone (the paper's other learner)"
+    )
     p.add_argument("--out", default=str(ROOT / "results" / "precision.json"))
     p.add_argument("--doc", default=str(ROOT / "docs" / "PERFORMANCE.md"))
     p.add_argument("--no-doc", action="store_true", help="print the table only")
@@ -43,14 +47,14 @@ def path_length(path: list | None) -> int | None:
     return None if path is None else len(path) - 1
 
 
-def measure(scenario: str, seed: int) -> dict:
+def measure(scenario: str, seed: int, assist: bool) -> dict:
     """One seed of one scenario: train and plan in f64 and in f32."""
-    row: dict = {"scenario": scenario, "seed": seed}
+    row: dict = {"scenario": scenario, "seed": seed, "assist": assist}
     shortest = sa.shortest_path(scenario)
     row["shortest_path_length"] = path_length(shortest)
     for p in ("f64", "f32"):
-        t = sa.train(scenario, seed=seed, q_precision=p)
-        plan = sa.plan(scenario, seed=seed, q_precision=p)
+        t = sa.train(scenario, seed=seed, assist=assist, q_precision=p)
+        plan = sa.plan(scenario, seed=seed, assist=assist, q_precision=p)
         row[p] = {
             "path": None if t.path is None else [list(c) for c in t.path],
             "path_length": path_length(t.path),
@@ -119,7 +123,8 @@ def main() -> None:
         rows = json.loads(Path(a.from_json).read_text())["runs"]
     else:
         load = getloadavg()[0]
-        rows = [measure(s, seed) for s in a.scenarios for seed in range(a.seeds)]
+        assist = not a.no_assist
+        rows = [measure(s, seed, assist) for s in a.scenarios for seed in range(a.seeds)]
         out = Path(a.out)
         out.parent.mkdir(parents=True, exist_ok=True)
         meta = {
