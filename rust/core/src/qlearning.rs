@@ -267,55 +267,39 @@ trait QValue: Copy + PartialOrd + std::fmt::Debug {
     fn wrap(rows: Vec<[Self; NUM_ACTIONS]>) -> Rows;
 }
 
-impl QValue for f64 {
-    const PRECISION: QPrecision = QPrecision::F64;
-    const ZERO: Self = 0.0;
-    #[inline(always)]
-    fn from_f64(v: f64) -> Self {
-        v
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self
-    }
-    fn is_finite(self) -> bool {
-        f64::is_finite(self)
-    }
-    fn write_le(self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.to_le_bytes());
-    }
-    fn read_le(bytes: &[u8]) -> Self {
-        f64::from_le_bytes(bytes.try_into().expect("eight bytes"))
-    }
-    fn wrap(rows: Vec<[Self; NUM_ACTIONS]>) -> Rows {
-        Rows::F64(rows)
-    }
+/// [`QValue`] for a float type `$t` stored as `Rows::$variant`.
+macro_rules! impl_q_value {
+    ($t:ty, $variant:ident) => {
+        impl QValue for $t {
+            const PRECISION: QPrecision = QPrecision::$variant;
+            const ZERO: Self = 0.0;
+            #[inline(always)]
+            fn from_f64(v: f64) -> Self {
+                // The identity for f64; rounding to nearest for f32.
+                v as $t
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            fn is_finite(self) -> bool {
+                <$t>::is_finite(self)
+            }
+            fn write_le(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+            fn read_le(bytes: &[u8]) -> Self {
+                <$t>::from_le_bytes(bytes.try_into().expect("one value's bytes"))
+            }
+            fn wrap(rows: Vec<[Self; NUM_ACTIONS]>) -> Rows {
+                Rows::$variant(rows)
+            }
+        }
+    };
 }
 
-impl QValue for f32 {
-    const PRECISION: QPrecision = QPrecision::F32;
-    const ZERO: Self = 0.0;
-    #[inline(always)]
-    fn from_f64(v: f64) -> Self {
-        v as f32
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self as f64
-    }
-    fn is_finite(self) -> bool {
-        f32::is_finite(self)
-    }
-    fn write_le(self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.to_le_bytes());
-    }
-    fn read_le(bytes: &[u8]) -> Self {
-        f32::from_le_bytes(bytes.try_into().expect("four bytes"))
-    }
-    fn wrap(rows: Vec<[Self; NUM_ACTIONS]>) -> Rows {
-        Rows::F32(rows)
-    }
-}
+impl_q_value!(f64, F64);
+impl_q_value!(f32, F32);
 
 /// Rows of six from flat row-major values (`num_states * 6` of them).
 fn rows_of<V: QValue>(num_states: usize, values: &[V]) -> Result<Vec<[V; NUM_ACTIONS]>> {
@@ -915,7 +899,7 @@ fn train_impl(
     let started = Instant::now();
     opts.validate()?;
     let n = world.num_states();
-    let mut q = match initial_q {
+    let q = match initial_q {
         Some(q) if q.num_states() != n => {
             return Err(Error::QTableMismatch(format!(
                 "initial Q-table has {} states, world has {n}",
@@ -930,38 +914,23 @@ fn train_impl(
         },
     };
     // One dispatch on the value type per run; the loop itself is generic.
-    let l = with_rows!(&mut q.rows, r => learn(world, opts, r, progress, rollout_every_episode));
-    Ok(TrainResult {
-        path: l.path,
-        steps_per_episode: l.steps_per_episode,
-        reached_per_episode: l.reached_per_episode,
-        converged_episode: l.converged_episode,
-        length_converged_episode: l.length_converged_episode,
-        total_steps: l.total_steps,
-        wall_time_s: started.elapsed().as_secs_f64(),
-        q,
-    })
+    Ok(
+        with_rows!(q.rows, rows => learn(world, opts, rows, progress, rollout_every_episode, started)),
+    )
 }
 
-/// What [`learn`] gives besides the updated Q-values.
-struct Learned {
-    path: Option<Vec<Cell>>,
-    steps_per_episode: Vec<u32>,
-    reached_per_episode: Vec<bool>,
-    converged_episode: Option<u32>,
-    length_converged_episode: Option<u32>,
-    total_steps: u64,
-}
-
-/// The episodes of [`train_impl`], updating `qr` in place.
+/// The episodes of [`train_impl`], learning on `rows` (the run's table); `started` is when
+/// the call began (for `wall_time_s`).
 fn learn<V: QValue>(
     world: &GridWorld,
     opts: &TrainOptions,
-    qr: &mut [[V; NUM_ACTIONS]],
+    mut rows: Vec<[V; NUM_ACTIONS]>,
     progress: Option<&dyn Fn(u32)>,
     rollout_every_episode: bool,
-) -> Learned {
+    started: Instant,
+) -> TrainResult {
     let n = world.num_states();
+    let qr: &mut [[V; NUM_ACTIONS]] = &mut rows;
     // Rewards, computed exactly as `GridWorld::step` does: eq. 5 by kind of move
     // (plain, collision, reaching), plus eq. 10 by new state, plus eq. 9.
     let assist = opts.assist;
@@ -1127,13 +1096,17 @@ fn learn<V: QValue>(
     } else {
         None
     };
-    Learned {
+    TrainResult {
         path: final_path,
         steps_per_episode,
         reached_per_episode,
         converged_episode: path_ok.then_some(last_change),
         length_converged_episode: path_ok.then_some(last_length_change),
         total_steps,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        q: QTable {
+            rows: V::wrap(rows),
+        },
     }
 }
 

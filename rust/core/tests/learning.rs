@@ -721,6 +721,11 @@ fn qtable_load_onto_another_world_is_a_mismatch() {
     assert_eq!(QTable::load(&path, &moved_start).unwrap(), q);
 }
 
+/// Whether loading gave an I/O error of kind `InvalidData` (a bad file, not a missing one).
+fn is_invalid_data(r: sixaxis_core::Result<QTable>) -> bool {
+    matches!(r, Err(Error::Io { ref source, .. }) if source.kind() == std::io::ErrorKind::InvalidData)
+}
+
 #[test]
 fn corrupt_or_foreign_files_are_io_errors() {
     let sc = scenario("paper_simple");
@@ -730,7 +735,6 @@ fn corrupt_or_foreign_files_are_io_errors() {
     let path = dir.path().join("q.qtable");
     q.save(&path, &w).unwrap();
     let good = std::fs::read(&path).unwrap();
-    let is_invalid_data = |r: sixaxis_core::Result<QTable>| matches!(r, Err(Error::Io { ref source, .. }) if source.kind() == std::io::ErrorKind::InvalidData);
     // Truncated.
     std::fs::write(&path, &good[..good.len() - 8]).unwrap();
     assert!(is_invalid_data(QTable::load(&path, &w)));
@@ -998,7 +1002,6 @@ fn qtable_file_without_a_value_type_reads_as_f64() {
     let back = QTable::load(&path, &w).unwrap();
     assert_eq!((back.precision(), &back), (QPrecision::F64, &q));
     // A header claiming f32 over f64 values, or naming another type, is refused.
-    let is_invalid_data = |r: sixaxis_core::Result<QTable>| matches!(r, Err(Error::Io { ref source, .. }) if source.kind() == std::io::ErrorKind::InvalidData);
     for claim in [&b"\"values\":\"f32\","[..], b"\"values\":\"f16\","] {
         let mut lie = text[..at].to_vec();
         lie.extend_from_slice(claim);
