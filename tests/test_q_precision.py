@@ -81,3 +81,18 @@ def test_plan_with_f32_values(paper_simple):
     p = sa.plan(paper_simple, seed=0, q_precision="f32")
     assert p.success
     assert p.path[0] == paper_simple.start and p.path[-1] == paper_simple.target
+
+
+def test_cli_resumes_an_f32_file_in_an_f64_run(sixaxis_bin, tmp_path, f32_run, paper_simple):
+    """``--q-in`` of an f32 file into the default f64 run: widened exactly, as from Python."""
+    q32 = tmp_path / "q32.bin"
+    f32_run.save_q(q32)
+    q_out = tmp_path / "out.bin"
+    cmd = [str(sixaxis_bin), "train", "--scenario", "paper_simple", "--seed", "7", "-q"]
+    cmd += ["--episodes", "30", "--q-in", str(q32), "--q-out", str(q_out)]
+    cli = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
+    py = sa.train(paper_simple, seed=7, episodes=30, initial_q=sa.load_q(q32, paper_simple))
+    assert cli["q_precision"] == "f64" and cli["total_steps"] == py.total_steps
+    out = sa.load_q(q_out, paper_simple)
+    assert out.dtype == np.float64
+    np.testing.assert_array_equal(out, py.q)
