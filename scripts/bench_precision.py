@@ -117,6 +117,13 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def dump(meta: dict, rows: list[dict]) -> str:
+    """The figures as JSON text, one run per line."""
+    runs = ",\n".join("  " + json.dumps(r) for r in rows)
+    head = json.dumps(meta)[:-1]
+    return f'{head}, "runs": [\n{runs}\n]}}\n'
+
+
 def main() -> None:
     a = parse_args()
     if a.from_json:
@@ -132,7 +139,7 @@ def main() -> None:
             "load_average_1min": round(load, 2),
             "seeds": a.seeds,
         }
-        out.write_text(json.dumps({**meta, "runs": rows}, indent=1) + "\n")
+        out.write_text(dump(meta, rows))
     text = table(rows)
     print(text)
     if not a.no_doc:
