@@ -1,15 +1,18 @@
 """Scale table: paper_simple re-gridded to finer cells, learned with ``--episodes auto``.
 
-For each cell size and each initial-Q rule (``--initial-q``: ``zero``, the paper's learner,
-and ``distance``, ours): ``sixaxis regrid`` writes the world, ``sixaxis train --episodes
-auto --initial-q RULE`` learns it and ``sixaxis plan --episodes auto --initial-q RULE`` runs
-the whole Algorithm 2 on it, each under ``/usr/bin/time -v`` for the peak RSS. The table
-(states, Q-table bytes, episodes and env steps to the optimal path, wall times, peak RSS,
-against the goals of issue 13) replaces the text between the ``scale`` markers of
+For each cell size, each initial-Q rule (``--initial-q``: ``zero``, the paper's learner,
+and ``distance``, ours) and each Q-value type (``--q-precision``: ``f64``, the default, and
+``f32``): ``sixaxis regrid`` writes the world, ``sixaxis train --episodes auto --initial-q
+RULE --q-precision P`` learns it and ``sixaxis plan`` with the same flags runs the whole
+Algorithm 2 on it, each under ``/usr/bin/time -v`` for the peak RSS. An f32 row also learns
+the same world in f64 (untimed) and records whether the two learned paths are equal. The
+table (states, Q-table bytes, episodes and env steps to the optimal path, wall times, peak
+RSS, against the goals of issue 13) replaces the text between the ``scale`` markers of
 docs/PERFORMANCE.md; the raw figures go to --out, each row with its time and load average.
 
-    python scripts/bench_scale.py                    # 100, 50, 25, 12.5 mm, both rules
+    python scripts/bench_scale.py                    # 100, 50, 25, 12.5 mm, both rules, f64
     python scripts/bench_scale.py --cells 100 50 --initial-q distance   # a subset
+    python scripts/bench_scale.py --q-precision f64 f32 --skip 12.5/zero/f32   # with f32 rows
     python scripts/bench_scale.py --reuse docs/figures/scale.json   # measure only missing rows
     python scripts/bench_scale.py --from-json results/scale.json   # re-render the table
 """
@@ -33,6 +36,7 @@ LEARN_GOAL_S = {50.0: 0.2, 25.0: 1.0, 12.5: 10.0}
 PLAN_GOAL_S = {25.0: 2.0}
 RSS_GOAL_KB = {12.5: 1024 * 1024}
 RULES = ("zero", "distance")
+PRECISIONS = ("f64", "f32")
 
 
 def parse_args() -> argparse.Namespace:
@@ -51,10 +55,26 @@ def parse_args() -> argparse.Namespace:
         default=list(RULES),
         help="initial-Q rules to measure (learning.initial_q); one table row per cell and rule",
     )
+    p.add_argument(
+        "--q-precision",
+        nargs="+",
+        choices=PRECISIONS,
+        default=["f64"],
+        help="Q-value types to measure (learning.q_precision); one table row per cell, rule "
+        "and type",
+    )
+    p.add_argument(
+        "--skip",
+        nargs="*",
+        default=[],
+        metavar="CELL/RULE/TYPE",
+        help="combinations not to measure, e.g. 12.5/zero/f32 (Q = 0 at 12.5 mm takes minutes)",
+    )
     p.add_argument("--from-json", help="render the table from figures saved by --out")
     p.add_argument(
         "--reuse",
-        help="figures saved by --out: rows found there (same cell and rule) are kept, not re-run",
+        help="figures saved by --out: rows found there (same cell, rule and type) are kept, "
+        "not re-run",
     )
     return p.parse_args()
 
@@ -75,7 +95,19 @@ def rule_of(row: dict) -> str:
     return row.get("initial_q", "zero")
 
 
-def measure(binary: str, scenario: str, cell: float, rule: str, seed: int, tmp: Path) -> dict:
+def precision_of(row: dict) -> str:
+    """A row's Q-value type (rows saved before the option existed are f64)."""
+    return row.get("q_precision", "f64")
+
+
+def key(cell: float, rule: str, precision: str) -> str:
+    """The ``--skip`` spelling of a combination, e.g. ``12.5/zero/f32``."""
+    return f"{cell:g}/{rule}/{precision}"
+
+
+def measure(
+    binary: str, scenario: str, cell: float, rule: str, precision: str, seed: int, tmp: Path
+) -> dict:
     world = tmp / f"world_{cell}.json"
     subprocess.run(
         [binary, "regrid", "--scenario", scenario, "--cell-mm", str(cell), "--out", str(world)],
@@ -87,17 +119,24 @@ def measure(binary: str, scenario: str, cell: float, rule: str, seed: int, tmp: 
     for lo, hi in zip(b["min"], b["max"], strict=True):
         states *= hi - lo + 1
     common = ["--scenario", str(world), "--seed", str(seed), "--episodes", "auto", "-q"]
-    common += ["--initial-q", rule]
+    common += ["--initial-q", rule, "--q-precision", precision]
     load = getloadavg()[0]
     train, train_rss = timed([binary, "train", *common, "--no-curve"])
     plan, plan_rss = timed([binary, "plan", *common])
+    extra = {}
+    if precision != "f64":
+        f64_cmd = [binary, "train", *common[:-1], "f64", "--no-curve"]
+        f64 = json.loads(subprocess.run(f64_cmd, capture_output=True, check=True).stdout)
+        extra["f64_path_length"] = f64["path_length"]
+        extra["same_path_as_f64"] = f64["path"] == train["path"]
     return {
         "cell_mm": cell,
         "initial_q": rule,
+        "q_precision": precision,
         "measured_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
         "load_average_1min": round(load, 2),
         "states": states,
-        "q_table_bytes": states * 6 * 8,
+        "q_table_bytes": train["q_table_bytes"],
         "shortest_path_length": train["shortest_path_length"],
         "path_length": train["path_length"],
         "optimal": train["path_length"] == train["shortest_path_length"],
@@ -113,6 +152,7 @@ def measure(binary: str, scenario: str, cell: float, rule: str, seed: int, tmp: 
         "plan_wall_s": plan["wall_time_s"],
         "plan_learning_s": sum(r["learning_time_s"] for r in plan["rounds"]),
         "plan_peak_rss_kb": plan_rss,
+        **extra,
     }
 
 
@@ -132,19 +172,23 @@ def secs(value: float) -> str:
 
 def table(rows: list[dict]) -> str:
     lines = [
-        "| cell | initial Q | states | Q-table | optimum (moves) | learned | episodes to optimum "
-        "| env steps to optimum | episodes run | learning wall | peak RSS (train) "
-        "| Algorithm 2 wall (points, re-plans) | peak RSS (plan) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| cell | initial Q | Q values | states | Q-table | optimum (moves) | learned "
+        "| episodes to optimum | env steps to optimum | episodes run | learning wall "
+        "| peak RSS (train) | Algorithm 2 wall (points, re-plans) | peak RSS (plan) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         c = r["cell_mm"]
         rss_goal = RSS_GOAL_KB.get(c)
         train_rss = goal(r["train_peak_rss_kb"] / 1024, rss_goal and rss_goal / 1024, "{:.0f} MB")
         failed = "" if r["plan_success"] else ", failed"
+        learned = str(r["path_length"])
+        if "same_path_as_f64" in r:
+            learned += " (= f64 path)" if r["same_path_as_f64"] else " (≠ f64 path)"
         lines.append(
-            f"| {c:g} mm | {rule_of(r)} | {r['states']:,} | {r['q_table_bytes'] / 1e6:.2f} MB "
-            f"| {r['shortest_path_length']} | {r['path_length']} "
+            f"| {c:g} mm | {rule_of(r)} | {precision_of(r)} | {r['states']:,} "
+            f"| {r['q_table_bytes'] / 1e6:.2f} MB "
+            f"| {r['shortest_path_length']} | {learned} "
             f"| {r['converged_episode']:,} | {r['steps_to_converged']:,} "
             f"| {r['episodes_run']:,} | {goal(r['train_wall_s'], LEARN_GOAL_S.get(c), secs)} "
             f"| {train_rss} "
@@ -161,16 +205,20 @@ def main() -> None:
         rows = json.loads(Path(a.from_json).read_text())
     else:
         kept = json.loads(Path(a.reuse).read_text()) if a.reuse else []
-        known = {(r["cell_mm"], rule_of(r)): r for r in kept}
+        known = {key(r["cell_mm"], rule_of(r), precision_of(r)): r for r in kept}
         rows = []
         with tempfile.TemporaryDirectory() as d:
             for c in a.cells:
                 for rule in a.initial_q:
-                    row = known.get((c, rule))
-                    if row is None:
-                        row = measure(a.binary, a.scenario, c, rule, a.seed, Path(d))
-                        print(f"measured {c:g} mm, initial Q {rule}", flush=True)
-                    rows.append(row)
+                    for precision in a.q_precision:
+                        k = key(c, rule, precision)
+                        row = known.get(k)
+                        if row is None and k in a.skip:
+                            continue
+                        if row is None:
+                            row = measure(a.binary, a.scenario, c, rule, precision, a.seed, Path(d))
+                            print(f"measured {k}", flush=True)
+                        rows.append(row)
         out = Path(a.out)
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(rows, indent=2) + "\n")

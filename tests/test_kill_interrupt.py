@@ -1,6 +1,6 @@
 """SIGKILL at random moments of every file write of the CLI (and of a benchmark study's
-result files) leaves the old file or the new one, never a partial; Ctrl-C (SIGINT) during train, plan and reproduce exits with code 130
-quickly and writes nothing.
+result files) leaves the old file or the new one, never a partial; Ctrl-C (SIGINT) during
+train, plan and reproduce exits with code 130 quickly and writes nothing.
 
 KILL_ROUNDS (default 12 per output, the CI run) sets how many kills each output gets:
     KILL_ROUNDS=200 python -m pytest tests/test_kill_interrupt.py -q

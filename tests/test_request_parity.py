@@ -34,6 +34,15 @@ GOOD = [
         {"initial_q": "zero", "seed": 2, "episodes": 300},
         ["--initial-q", "zero", "--seed", "2", "--episodes", "300"],
     ),
+    ({"q_precision": "f32", "episodes": 300}, ["--q-precision", "f32", "--episodes", "300"]),
+    (
+        {"q_precision": "f64", "seed": 4, "episodes": 300},
+        ["--q-precision", "f64", "--seed", "4", "--episodes", "300"],
+    ),
+    (
+        {"q_precision": "f32", "initial_q": "distance", "seed": 1, "episodes": 300},
+        ["--q-precision", "f32", "--initial-q", "distance", "--seed", "1", "--episodes", "300"],
+    ),
 ]
 
 # (Python keywords, CLI flags, the error text both give).
@@ -64,6 +73,16 @@ BAD = [
         {"initial_q": "optimistic"},
         ["--initial-q", "optimistic"],
         "invalid argument `initial_q` = optimistic: must be one of zero, distance",
+    ),
+    (
+        {"q_precision": "f16"},
+        ["--q-precision", "f16"],
+        "invalid argument `q_precision` = f16: must be one of f64, f32",
+    ),
+    (
+        {"q_precision": "F32"},
+        ["--q-precision", "F32"],
+        "invalid argument `q_precision` = F32: must be one of f64, f32",
     ),
 ]
 
@@ -154,6 +173,7 @@ def test_same_plan_error(sixaxis_bin, kwargs, flags, text):
         ({"assist": 1}, "assist"),
         ({"detour": "yes"}, "detour"),
         ({"initial_q": 3}, "initial_q"),
+        ({"q_precision": 32}, "q_precision"),
     ],
 )
 def test_python_only_values_rejected_alike(command, kwargs, name):

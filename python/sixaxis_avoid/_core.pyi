@@ -13,6 +13,8 @@ VECTOR_OBS_DIM: int
 
 Cell = tuple[int, int, int]
 CellLike = Sequence[int] | npt.NDArray[np.integer[Any]]
+# A Q-table, (num_states, 6): float64, or float32 for q_precision="f32".
+QArray = npt.NDArray[np.float64] | npt.NDArray[np.float32]
 
 # Exceptions (created at import; every one is a ValueError through SixAxisError).
 class SixAxisError(ValueError): ...
@@ -136,7 +138,9 @@ class TrainResult:
     @property
     def episodes(self) -> int: ...
     @property
-    def q(self) -> npt.NDArray[np.float64]: ...
+    def q(self) -> QArray: ...
+    @property
+    def q_precision(self) -> Literal["f64", "f32"]: ...
     @property
     def state_cells(self) -> npt.NDArray[np.int32]: ...
     @property
@@ -155,7 +159,8 @@ def train(
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
     extra_obstacles: Iterable[CellLike] | None = None,
-    initial_q: Literal["zero", "distance"] | npt.NDArray[np.float64] | None = None,
+    initial_q: Literal["zero", "distance"] | QArray | None = None,
+    q_precision: Literal["f64", "f32"] | None = None,
     progress: Callable[[int], object] | None = None,
 ) -> TrainResult: ...
 def load_q(
@@ -163,9 +168,9 @@ def load_q(
     scenario: ScenarioLike = None,
     *,
     extra_obstacles: Iterable[CellLike] | None = None,
-) -> npt.NDArray[np.float64]: ...
+) -> QArray: ...
 def greedy_path_of(
-    q: npt.NDArray[np.float64],
+    q: QArray,
     scenario: ScenarioLike = None,
     *,
     max_steps: int | None = None,
@@ -325,6 +330,7 @@ def plan(
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
     initial_q: Literal["zero", "distance"] | None = None,
+    q_precision: Literal["f64", "f32"] | None = None,
     max_replans: int | None = None,
     learner: PathLearner | None = None,
 ) -> PlanResult: ...

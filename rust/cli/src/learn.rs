@@ -60,6 +60,10 @@ pub struct LearnArgs {
     /// `learning.initial_q`.
     #[arg(long, value_name = "zero|distance")]
     pub initial_q: Option<String>,
+    /// The type of the Q-values: f64 (the default) or f32 (half the memory per state; see
+    /// docs/SCENARIOS.md). Default: the scenario's `learning.q_precision`.
+    #[arg(long, value_name = "f64|f32")]
+    pub q_precision: Option<String>,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -90,6 +94,7 @@ impl LearnArgs {
             distance: switch(self.distance, self.no_distance),
             max_steps_per_episode: int(MAX_STEPS, &self.max_steps_per_episode)?,
             initial_q: self.initial_q.clone(),
+            q_precision: self.q_precision.clone(),
         })
     }
 
@@ -106,7 +111,8 @@ impl LearnArgs {
 pub struct TrainArgs {
     #[command(flatten)]
     pub learn: LearnArgs,
-    /// Start from this saved Q-table instead of zeros (resume).
+    /// Start from this saved Q-table instead of zeros (resume); a table of the other
+    /// precision is converted to the run's (`--q-precision`).
     #[arg(long, value_name = "FILE", conflicts_with = "initial_q")]
     pub q_in: Option<PathBuf>,
     /// Save the learned Q-table here (atomically).
@@ -132,6 +138,8 @@ pub fn train_json(
         "episodes": opts.episodes,
         "episodes_auto": opts.episodes_auto,
         "initial_q": opts.initial_q.name(),
+        "q_precision": opts.q_precision.name(),
+        "q_table_bytes": r.q.num_states() * r.q.bytes_per_state(),
         "episodes_run": r.steps_per_episode.len(),
         "steps_to_converged": r.converged_episode.map(|e| {
             r.steps_per_episode[..=e as usize].iter().map(|&k| k as u64).sum::<u64>()

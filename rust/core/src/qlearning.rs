@@ -6,6 +6,8 @@
 //! - [`greedy_path`] — the learned path (`place`, eq. 8) of a Q-table.
 //! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
 //! - [`QTable::save`] / [`QTable::load`] — atomic Q-table files, checked against the world.
+//! - [`QTable::zeros_with`] / [`QTable::precision`] / [`QTable::bytes_per_state`] — tables of
+//!   f64 (the default) or f32 values ([`QPrecision`]); values are read and written as f64.
 //!
 //! ```
 //! use sixaxis_core::grid::GridWorld;
@@ -76,23 +78,40 @@
 //!   with eq. 9 off and `P < p`, a state more than 9 moves from the target (at the
 //!   defaults) is worth more colliding forever (`-P / (1 - gamma)` = -80,000) than any
 //!   path; no start table changes that optimum, so no path is learned there.
+//! - **`q_precision = "f32"`** (`learning.q_precision`, `--q-precision f32`; ours, the
+//!   paper's f64 stays the default): the table stores f32 values, 24 bytes per state
+//!   instead of 48 ([`QTable::bytes_per_state`]). Nothing else changes: each update of
+//!   eq. 6 reads the stored values as f64, computes in f64 exactly as the f64 learner does,
+//!   and stores the result rounded to the nearest f32; greedy choices and ties compare the
+//!   stored values. The `"distance"` start table is computed in f64 and stored rounded. An
+//!   f32 run is deterministic like an f64 run, but not equal to it: rounding makes
+//!   different values tie or order differently, so the random stream and the learned path
+//!   may differ (measured in docs/PERFORMANCE.md). The learner is generic over the value
+//!   type and dispatched once per call of [`train`]; with f64 it is the identity and the
+//!   results are bit for bit those of the f64-only learner.
 //! - **Resuming** ([`train`] with `initial_q`): the run starts from that table but is
 //!   otherwise a fresh run: its generator is seeded with `opts.seed`, episodes (and so the
 //!   epsilon schedule) count from 0 again, and the converged episode is an index of this
 //!   run. Pass a seed different from the first run's to avoid replaying its random stream,
-//!   and e.g. `epsilon_start = 0` to continue purely greedily.
+//!   and e.g. `epsilon_start = 0` to continue purely greedily. A table whose precision is
+//!   not `opts.q_precision` is converted first ([`QTable::into_precision`]: exact from f32
+//!   to f64, rounded to the nearest f32 the other way, an error for a value beyond the f32
+//!   range), so the result always has the run's precision.
 //!
 //! # Q-table file format (version 1)
 //!
 //! ```text
 //! SIXAXIS-QTABLE 1\n
 //! {JSON header}\n
-//! num_states * 6 f64 values, little-endian, row-major (state, action)
+//! num_states * 6 values (f64 or f32, as `values` says), little-endian, row-major (state, action)
 //! ```
-//! The header records `num_states`, `actions` (6), `bounds`, `start`, `target`,
+//! The header records `num_states`, `actions` (6), `values` (`"f64"` or `"f32"`; a file
+//! without it, written before f32 tables existed, holds f64), `bounds`, `start`, `target`,
 //! `blocked_cells` (count), `fingerprint` (FNV-1a 64 of bounds, blocked cells and target,
-//! hex) and `values_checksum` (FNV-1a 64 of the value bytes, hex). Values are stored as raw
-//! bits, so a round trip is exact. [`QTable::load`] answers [`Error::QTableMismatch`] when
+//! hex), `values_checksum` (FNV-1a 64 of the value bytes, hex) and `layout` (the same in
+//! words). Values are stored as raw bits, so a round trip is exact in either precision.
+//! [`QTable::load`] returns the table in the file's precision ([`train`] converts it to the
+//! run's). It answers [`Error::QTableMismatch`] when
 //! bounds, target or blocked cells differ from the world's; a file that is not a Q-table,
 //! is truncated or fails its checksum gives an [`Error::Io`] of kind `InvalidData`.
 //! Saving writes a temporary file in the same directory and renames it over the target;
@@ -107,7 +126,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::grid::{Assist, Fnv, GridWorld, Transition, NUM_ACTIONS};
-use crate::scenario::{Bounds, Cell, InitialQ, Scenario};
+use crate::scenario::{Bounds, Cell, InitialQ, QPrecision, Scenario};
 
 /// Everything [`train`] needs besides the world.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -135,6 +154,10 @@ pub struct TrainOptions {
     /// distance bound of [`distance_bound_table`].
     #[serde(default)]
     pub initial_q: InitialQ,
+    /// The type the Q-values are stored in: f64 (the default) or f32 (half the memory;
+    /// updates computed in f64, stored rounded).
+    #[serde(default)]
+    pub q_precision: QPrecision,
 }
 
 /// Shortest settle horizon of `episodes_auto`, episodes.
@@ -158,6 +181,7 @@ impl TrainOptions {
             max_steps_per_episode: l.max_steps_per_episode,
             episodes_auto: false,
             initial_q: l.initial_q,
+            q_precision: l.q_precision,
         }
     }
 
@@ -203,27 +227,110 @@ impl TrainOptions {
     }
 }
 
-/// Q-values: `num_states` rows of six actions, starting at 0.
+/// Q-values: `num_states` rows of six actions, stored as f64 (the default) or f32
+/// ([`QPrecision`]); every accessor reads and writes them as f64.
 #[derive(Debug, Clone, PartialEq)]
 pub struct QTable {
-    rows: Vec<[f64; NUM_ACTIONS]>,
+    rows: Rows,
+}
+
+/// The rows of a [`QTable`], in its precision.
+#[derive(Debug, Clone, PartialEq)]
+enum Rows {
+    F64(Vec<[f64; NUM_ACTIONS]>),
+    F32(Vec<[f32; NUM_ACTIONS]>),
+}
+
+/// `body` with `$r` bound to the rows of `$rows`, whatever their value type.
+macro_rules! with_rows {
+    ($rows:expr, $r:ident => $body:expr) => {
+        match $rows {
+            Rows::F64($r) => $body,
+            Rows::F32($r) => $body,
+        }
+    };
+}
+
+/// A type Q-values are stored in. Arithmetic is always done in f64: a value is read with
+/// [`QValue::to_f64`] and an update's result stored with [`QValue::from_f64`] (the identity
+/// for f64, rounding to nearest for f32).
+trait QValue: Copy + PartialOrd + std::fmt::Debug {
+    const PRECISION: QPrecision;
+    const ZERO: Self;
+    fn from_f64(v: f64) -> Self;
+    fn to_f64(self) -> f64;
+    fn is_finite(self) -> bool;
+    /// Append the little-endian bytes.
+    fn write_le(self, out: &mut Vec<u8>);
+    /// From `PRECISION.value_bytes()` little-endian bytes.
+    fn read_le(bytes: &[u8]) -> Self;
+    fn wrap(rows: Vec<[Self; NUM_ACTIONS]>) -> Rows;
+}
+
+/// [`QValue`] for a float type `$t` stored as `Rows::$variant`.
+macro_rules! impl_q_value {
+    ($t:ty, $variant:ident) => {
+        impl QValue for $t {
+            const PRECISION: QPrecision = QPrecision::$variant;
+            const ZERO: Self = 0.0;
+            #[inline(always)]
+            fn from_f64(v: f64) -> Self {
+                // The identity for f64; rounding to nearest for f32.
+                v as $t
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            fn is_finite(self) -> bool {
+                <$t>::is_finite(self)
+            }
+            fn write_le(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+            fn read_le(bytes: &[u8]) -> Self {
+                <$t>::from_le_bytes(bytes.try_into().expect("one value's bytes"))
+            }
+            fn wrap(rows: Vec<[Self; NUM_ACTIONS]>) -> Rows {
+                Rows::$variant(rows)
+            }
+        }
+    };
+}
+
+impl_q_value!(f64, F64);
+impl_q_value!(f32, F32);
+
+/// Rows of six from flat row-major values (`num_states * 6` of them).
+fn rows_of<V: QValue>(num_states: usize, values: &[V]) -> Result<Vec<[V; NUM_ACTIONS]>> {
+    if values.len() != num_states * NUM_ACTIONS {
+        return Err(Error::argument(
+            "values",
+            format!("{} values", values.len()),
+            format!("expected num_states * 6 = {}", num_states * NUM_ACTIONS),
+        ));
+    }
+    Ok(values
+        .chunks_exact(NUM_ACTIONS)
+        .map(|c| c.try_into().expect("chunks of six"))
+        .collect())
 }
 
 /// Index of the largest value, lowest index on ties.
 #[inline(always)]
-fn argmax_lowest(row: &[f64; NUM_ACTIONS]) -> usize {
+fn argmax_lowest<V: QValue>(row: &[V; NUM_ACTIONS]) -> usize {
     max_mask(row).trailing_zeros() as usize
 }
 
 /// Bit `a` set for every action of maximal value (branch-free).
 #[inline(always)]
-fn max_mask(row: &[f64; NUM_ACTIONS]) -> u32 {
+fn max_mask<V: QValue>(row: &[V; NUM_ACTIONS]) -> u32 {
     mask_of(row, row_max(row))
 }
 
 /// Bit `a` set for every action whose value equals `m`.
 #[inline(always)]
-fn mask_of(row: &[f64; NUM_ACTIONS], m: f64) -> u32 {
+fn mask_of<V: QValue>(row: &[V; NUM_ACTIONS], m: V) -> u32 {
     let mut mask = 0u32;
     for (i, &v) in row.iter().enumerate() {
         mask |= ((v == m) as u32) << i;
@@ -241,7 +348,7 @@ fn nth_set_bit(mut mask: u32, n: u32) -> usize {
 }
 
 #[inline(always)]
-fn row_max(row: &[f64; NUM_ACTIONS]) -> f64 {
+fn row_max<V: QValue>(row: &[V; NUM_ACTIONS]) -> V {
     // A tree (depth 3, not a chain of 5): the value is the same, the latency shorter.
     let a = if row[1] > row[0] { row[1] } else { row[0] };
     let b = if row[3] > row[2] { row[3] } else { row[2] };
@@ -260,68 +367,137 @@ fn updated(old: f64, reward: f64, bootstrap: f64, alpha: f64, gamma: f64) -> f64
     old + alpha * (reward + gamma * bootstrap - old)
 }
 
+/// The rows of `values`, converted to `V`; an error names the first value that does not
+/// fit `V` (finite f64s beyond the f32 range become infinite).
+fn converted<V: QValue, W: QValue>(values: &[[W; NUM_ACTIONS]]) -> Result<Vec<[V; NUM_ACTIONS]>> {
+    let rows: Vec<[V; NUM_ACTIONS]> = values
+        .iter()
+        .map(|row| row.map(|v| V::from_f64(v.to_f64())))
+        .collect();
+    for (s, row) in rows.iter().enumerate() {
+        if let Some(a) = row.iter().position(|v| !v.is_finite()) {
+            return Err(Error::argument(
+                "q_precision",
+                V::PRECISION.name(),
+                format!(
+                    "Q-value {} (state {s}, action {a}) does not fit in {}",
+                    values[s][a].to_f64(),
+                    V::PRECISION.name()
+                ),
+            ));
+        }
+    }
+    Ok(rows)
+}
+
 impl QTable {
-    /// All zeros.
+    /// All zeros, f64.
     pub fn zeros(num_states: usize) -> Self {
-        QTable {
-            rows: vec![[0.0; NUM_ACTIONS]; num_states],
+        QTable::zeros_with(num_states, QPrecision::F64)
+    }
+
+    /// All zeros, in `precision`.
+    pub fn zeros_with(num_states: usize, precision: QPrecision) -> Self {
+        let rows = match precision {
+            QPrecision::F64 => Rows::F64(vec![[0.0; NUM_ACTIONS]; num_states]),
+            QPrecision::F32 => Rows::F32(vec![[0.0; NUM_ACTIONS]; num_states]),
+        };
+        QTable { rows }
+    }
+
+    /// An f64 table from flat row-major values (`num_states * 6` of them).
+    pub fn from_values(num_states: usize, values: Vec<f64>) -> Result<Self> {
+        Ok(QTable {
+            rows: Rows::F64(rows_of(num_states, &values)?),
+        })
+    }
+
+    /// An f32 table from flat row-major values (`num_states * 6` of them).
+    pub fn from_values_f32(num_states: usize, values: Vec<f32>) -> Result<Self> {
+        Ok(QTable {
+            rows: Rows::F32(rows_of(num_states, &values)?),
+        })
+    }
+
+    /// The same values in `precision`: exact from f32 to f64, rounded to the nearest f32
+    /// the other way (an error names a value beyond the f32 range). A no-op if the table
+    /// already has that precision.
+    pub fn into_precision(self, precision: QPrecision) -> Result<Self> {
+        let rows = match (self.rows, precision) {
+            (Rows::F64(r), QPrecision::F32) => Rows::F32(converted(&r)?),
+            (Rows::F32(r), QPrecision::F64) => Rows::F64(converted(&r)?),
+            (rows, _) => rows,
+        };
+        Ok(QTable { rows })
+    }
+
+    /// The type the values are stored in.
+    pub fn precision(&self) -> QPrecision {
+        match self.rows {
+            Rows::F64(_) => QPrecision::F64,
+            Rows::F32(_) => QPrecision::F32,
         }
     }
 
-    /// From flat row-major values (`num_states * 6` of them).
-    pub fn from_values(num_states: usize, values: Vec<f64>) -> Result<Self> {
-        if values.len() != num_states * NUM_ACTIONS {
-            return Err(Error::argument(
-                "values",
-                format!("{} values", values.len()),
-                format!("expected num_states * 6 = {}", num_states * NUM_ACTIONS),
-            ));
-        }
-        let rows = values
-            .chunks_exact(NUM_ACTIONS)
-            .map(|c| c.try_into().expect("chunks of six"))
-            .collect();
-        Ok(QTable { rows })
+    /// Bytes of Q-values per state: 48 for f64, 24 for f32.
+    pub fn bytes_per_state(&self) -> usize {
+        NUM_ACTIONS * self.precision().value_bytes()
     }
 
     /// Number of states.
     pub fn num_states(&self) -> usize {
-        self.rows.len()
+        with_rows!(&self.rows, r => r.len())
     }
 
-    /// All values, row-major (state, action).
-    pub fn values(&self) -> &[f64] {
-        self.rows.as_flattened()
+    /// All values as f64 (exact for both precisions), row-major (state, action); a copy.
+    pub fn values(&self) -> Vec<f64> {
+        with_rows!(&self.rows, r => r.as_flattened().iter().map(|v| v.to_f64()).collect())
+    }
+
+    /// The values of an f64 table, row-major, without a copy (`None` for f32).
+    pub fn values_f64(&self) -> Option<&[f64]> {
+        match &self.rows {
+            Rows::F64(r) => Some(r.as_flattened()),
+            Rows::F32(_) => None,
+        }
+    }
+
+    /// The values of an f32 table, row-major, without a copy (`None` for f64).
+    pub fn values_f32(&self) -> Option<&[f32]> {
+        match &self.rows {
+            Rows::F32(r) => Some(r.as_flattened()),
+            Rows::F64(_) => None,
+        }
     }
 
     /// Q(s, a).
     #[inline]
     pub fn get(&self, s: usize, a: usize) -> f64 {
-        self.rows[s][a]
+        with_rows!(&self.rows, r => r[s][a].to_f64())
     }
 
-    /// Set Q(s, a).
+    /// Set Q(s, a) (rounded to the nearest f32 in an f32 table).
     #[inline]
     pub fn set(&mut self, s: usize, a: usize, value: f64) {
-        self.rows[s][a] = value;
+        with_rows!(&mut self.rows, r => r[s][a] = QValue::from_f64(value))
     }
 
     /// The six values of a state.
     #[inline]
-    pub fn row(&self, s: usize) -> &[f64; NUM_ACTIONS] {
-        &self.rows[s]
+    pub fn row(&self, s: usize) -> [f64; NUM_ACTIONS] {
+        with_rows!(&self.rows, r => r[s].map(QValue::to_f64))
     }
 
     /// `max_a Q(s, a)`.
     #[inline]
     pub fn max_value(&self, s: usize) -> f64 {
-        row_max(&self.rows[s])
+        with_rows!(&self.rows, r => row_max(&r[s]).to_f64())
     }
 
     /// The greedy action of a state, ties broken by the lowest action index.
     #[inline]
     pub fn greedy_action(&self, s: usize) -> usize {
-        argmax_lowest(&self.rows[s])
+        with_rows!(&self.rows, r => argmax_lowest(&r[s]))
     }
 
     /// Write the table to `path` atomically (temporary file in the same directory, then
@@ -334,11 +510,9 @@ impl QTable {
                 world.num_states()
             )));
         }
-        let values = self.values();
-        let mut body = Vec::with_capacity(values.len() * 8);
-        for v in values {
-            body.extend_from_slice(&v.to_le_bytes());
-        }
+        let precision = self.precision();
+        let mut body = Vec::with_capacity(self.num_states() * self.bytes_per_state());
+        with_rows!(&self.rows, r => r.as_flattened().iter().for_each(|v| v.write_le(&mut body)));
         let mut ck = Fnv::new();
         ck.write(&body);
         let header = FileHeader {
@@ -346,14 +520,17 @@ impl QTable {
             version: FORMAT_VERSION,
             num_states: self.num_states(),
             actions: NUM_ACTIONS,
+            values: Some(precision.name().to_string()),
             bounds: world.bounds(),
             start: world.cell_of(world.start()),
             target: world.cell_of(world.target()),
             blocked_cells: world.num_blocked(),
             fingerprint: format!("{:016x}", world.fingerprint()),
             values_checksum: format!("{:016x}", ck.finish()),
-            layout: "f64 little-endian, row-major (state, action); actions +x -x +y -y +z -z"
-                .to_string(),
+            layout: format!(
+                "{} little-endian, row-major (state, action); actions +x -x +y -y +z -z",
+                precision.name()
+            ),
         };
         let mut bytes = format!("{MAGIC}\n").into_bytes();
         bytes.extend_from_slice(
@@ -369,9 +546,11 @@ impl QTable {
     /// Read a table written by [`QTable::save`] and check it fits `world`
     /// ([`Error::QTableMismatch`] if bounds, target or blocked cells differ).
     pub fn load(path: &Path, world: &GridWorld) -> Result<QTable> {
-        // A table of `world` is its values plus a header of a few hundred bytes: reading no
-        // more than that keeps `/dev/zero` or a huge stray file from exhausting memory.
-        let max_bytes = (world.num_states() * NUM_ACTIONS * 8 + MAX_HEADER_BYTES) as u64;
+        // A table of `world` is its values (at most 8 bytes each, f64) plus a header of a
+        // few hundred bytes: reading no more than that keeps `/dev/zero` or a huge stray
+        // file from exhausting memory.
+        let largest = QPrecision::F64.value_bytes();
+        let max_bytes = (world.num_states() * NUM_ACTIONS * largest + MAX_HEADER_BYTES) as u64;
         let bytes = crate::io::read_bounded(path, max_bytes)?;
         QTable::from_file_bytes(&bytes, world, path)
     }
@@ -405,6 +584,12 @@ impl QTable {
                 header.format, header.version
             )));
         }
+        // Files written before f32 tables existed have no `values` field: f64.
+        let precision = match header.values.as_deref() {
+            None => QPrecision::F64,
+            Some(name) => QPrecision::from_name("values", name)
+                .map_err(|_| bad(format!("Q-table header has an unknown value type: {name}")))?,
+        };
         if header.actions != NUM_ACTIONS {
             return Err(Error::QTableMismatch(format!(
                 "file has {} actions per state, expected {NUM_ACTIONS}",
@@ -440,11 +625,13 @@ impl QTable {
             )));
         }
         let body = &rest[nl + 1..];
-        let expected = header.num_states * NUM_ACTIONS * 8;
+        let expected = header.num_states * NUM_ACTIONS * precision.value_bytes();
         if body.len() != expected {
             return Err(bad(format!(
-                "Q-table values have {} bytes, expected {expected}",
-                body.len()
+                "Q-table values have {} bytes, expected {expected} ({} {} values)",
+                body.len(),
+                header.num_states * NUM_ACTIONS,
+                precision.name()
             )));
         }
         let mut ck = Fnv::new();
@@ -452,20 +639,36 @@ impl QTable {
         if format!("{:016x}", ck.finish()) != header.values_checksum {
             return Err(bad("Q-table values fail their checksum".to_string()));
         }
-        let values: Vec<f64> = body
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().expect("chunks of eight")))
-            .collect();
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(bad(format!(
-                "Q-table value {i} (state {}, action {}) is {}, not a finite number",
+        let rows = match precision {
+            QPrecision::F64 => parse_rows::<f64>(header.num_states, body),
+            QPrecision::F32 => parse_rows::<f32>(header.num_states, body),
+        };
+        rows.map(|rows| QTable { rows }).map_err(|(i, v)| {
+            bad(format!(
+                "Q-table value {i} (state {}, action {}) is {v}, not a finite number",
                 i / NUM_ACTIONS,
                 i % NUM_ACTIONS,
-                values[i]
-            )));
-        }
-        QTable::from_values(header.num_states, values)
+            ))
+        })
     }
+}
+
+/// The rows of a file's value bytes (`num_states * 6 * V::BYTES` of them, checked), or the
+/// index and value of the first value that is not finite.
+fn parse_rows<V: QValue>(
+    num_states: usize,
+    body: &[u8],
+) -> std::result::Result<Rows, (usize, f64)> {
+    let values: Vec<V> = body
+        .chunks_exact(V::PRECISION.value_bytes())
+        .map(V::read_le)
+        .collect();
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err((i, values[i].to_f64()));
+    }
+    Ok(V::wrap(
+        rows_of(num_states, &values).expect("the body length was checked"),
+    ))
 }
 
 const MAGIC: &str = "SIXAXIS-QTABLE 1";
@@ -480,6 +683,9 @@ struct FileHeader {
     version: u32,
     num_states: usize,
     actions: usize,
+    /// `"f64"` or `"f32"`; absent (f64) in files written before f32 tables existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    values: Option<String>,
     bounds: Bounds,
     start: Cell,
     target: Cell,
@@ -491,7 +697,8 @@ struct FileHeader {
 
 /// One update of eq. 6 for the step `state --action--> t`: bootstraps from
 /// `max_a' Q(t.next, a')` unless `t.reached` (the target is terminal). Returns the new
-/// Q(state, action). The learner uses exactly this arithmetic.
+/// Q(state, action) as stored (rounded to the nearest f32 in an f32 table). The learner
+/// uses exactly this arithmetic.
 pub fn q_update(
     q: &mut QTable,
     state: usize,
@@ -501,17 +708,26 @@ pub fn q_update(
     gamma: f64,
 ) -> f64 {
     let bootstrap = if t.reached { 0.0 } else { q.max_value(t.next) };
-    let v = updated(q.rows[state][action], t.reward, bootstrap, alpha, gamma);
-    q.rows[state][action] = v;
-    v
+    let v = updated(q.get(state, action), t.reward, bootstrap, alpha, gamma);
+    q.set(state, action, v);
+    q.get(state, action)
 }
 
 /// The `"distance"` initial Q-table (`learning.initial_q`, ours; see the module docs):
 /// `Q0(s, a) = R1(s, a) + gamma * V0(next(s, a))`, where `R1` is the first step's reward
 /// with the move counted as an ordinary step (`-p`, or `+r` when it reaches the target,
 /// plus eq. 10 when on) and `V0(n)` bounds from above the return of every collision-free
-/// path from `n` to the target ([`distance_bound_values`]). The target's row is 0.
+/// path from `n` to the target ([`distance_bound_values`]). The target's row is 0. The
+/// table has `opts.q_precision` (values computed in f64, then stored).
 pub fn distance_bound_table(world: &GridWorld, opts: &TrainOptions) -> QTable {
+    let rows = match opts.q_precision {
+        QPrecision::F64 => Rows::F64(distance_bound_rows(world, opts)),
+        QPrecision::F32 => Rows::F32(distance_bound_rows(world, opts)),
+    };
+    QTable { rows }
+}
+
+fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &TrainOptions) -> Vec<[V; NUM_ACTIONS]> {
     let v0 = distance_bound_values(world, opts);
     let rw = world.rewards();
     let r_e = if opts.assist.distance {
@@ -521,26 +737,25 @@ pub fn distance_bound_table(world: &GridWorld, opts: &TrainOptions) -> QTable {
     };
     let d_o = world.start_distance_cells();
     let target = world.target();
-    let rows = world
+    world
         .transitions()
         .iter()
         .enumerate()
         .map(|(s, next)| {
             if s == target {
-                return [0.0; NUM_ACTIONS];
+                return [V::ZERO; NUM_ACTIONS];
             }
             next.map(|n| {
                 let n = n as usize;
                 let eq10 = r_e * (d_o - world.distance_to_target_cells(n));
-                if n == target {
+                V::from_f64(if n == target {
                     rw.target_reward + eq10
                 } else {
                     -rw.step_penalty + eq10 + opts.gamma * v0[n]
-                }
+                })
             })
         })
-        .collect();
-    QTable { rows }
+        .collect()
 }
 
 /// Per state `n`, an upper bound `V0(n)` of the discounted return (eqs. 5 and, when on, 10)
@@ -608,9 +823,9 @@ pub struct TrainResult {
 /// Greedy rollout from the start (ties: lowest action index), writing the visited states
 /// into `out` and stamping each with `gen` in `stamp` (the visited set) and its greedy
 /// action in `act`. Returns whether it reached the target.
-fn rollout(
+fn rollout<V: QValue>(
     world: &GridWorld,
-    q: &[[f64; NUM_ACTIONS]],
+    q: &[[V; NUM_ACTIONS]],
     max_steps: u32,
     stamp: &mut [u32],
     act: &mut [u8],
@@ -652,7 +867,7 @@ pub fn greedy_path(world: &GridWorld, q: &QTable, max_steps: u32) -> Option<Vec<
     let mut stamp = vec![0u32; n];
     let mut act = vec![0u8; n];
     let mut out = Vec::new();
-    if rollout(world, &q.rows, max_steps, &mut stamp, &mut act, 1, &mut out) {
+    if with_rows!(&q.rows, r => rollout(world, r, max_steps, &mut stamp, &mut act, 1, &mut out)) {
         Some(out.iter().map(|&s| world.cell_of(s as usize)).collect())
     } else {
         None
@@ -684,20 +899,38 @@ fn train_impl(
     let started = Instant::now();
     opts.validate()?;
     let n = world.num_states();
-    let mut q = match initial_q {
+    let q = match initial_q {
         Some(q) if q.num_states() != n => {
             return Err(Error::QTableMismatch(format!(
                 "initial Q-table has {} states, world has {n}",
                 q.num_states()
             )))
         }
-        Some(q) => q,
+        // A table of the other precision is converted (see the module docs).
+        Some(q) => q.into_precision(opts.q_precision)?,
         None => match opts.initial_q {
-            InitialQ::Zero => QTable::zeros(n),
+            InitialQ::Zero => QTable::zeros_with(n, opts.q_precision),
             InitialQ::Distance => distance_bound_table(world, opts),
         },
     };
+    // One dispatch on the value type per run; the loop itself is generic.
+    Ok(
+        with_rows!(q.rows, rows => learn(world, opts, rows, progress, rollout_every_episode, started)),
+    )
+}
 
+/// The episodes of [`train_impl`], learning on `rows` (the run's table); `started` is when
+/// the call began (for `wall_time_s`).
+fn learn<V: QValue>(
+    world: &GridWorld,
+    opts: &TrainOptions,
+    mut rows: Vec<[V; NUM_ACTIONS]>,
+    progress: Option<&dyn Fn(u32)>,
+    rollout_every_episode: bool,
+    started: Instant,
+) -> TrainResult {
+    let n = world.num_states();
+    let qr: &mut [[V; NUM_ACTIONS]] = &mut rows;
     // Rewards, computed exactly as `GridWorld::step` does: eq. 5 by kind of move
     // (plain, collision, reaching), plus eq. 10 by new state, plus eq. 9.
     let assist = opts.assist;
@@ -739,15 +972,12 @@ fn train_impl(
     let mut act = vec![0u8; n];
     let mut gen = 1u32;
     let mut path = Vec::new();
-    let mut path_ok = rollout(
-        world, &q.rows, max_steps, &mut stamp, &mut act, gen, &mut path,
-    );
+    let mut path_ok = rollout(world, qr, max_steps, &mut stamp, &mut act, gen, &mut path);
     let mut new_path = Vec::new();
     let mut last_change = 0u32;
     let mut last_length_change = 0u32;
 
     const NO_ACTION: usize = usize::MAX;
-    let qr = &mut q.rows;
     for ep in 0..episodes {
         // Explore when a uniform u32 is below epsilon * 2^32 (i.e. u < epsilon for
         // u = k / 2^32 uniform in [0, 1)).
@@ -802,11 +1032,11 @@ fn train_impl(
                     reward += reverse_pen;
                 }
             }
-            // Q-update (eq. 6).
+            // Q-update (eq. 6), in f64 whatever the stored type.
             let next_max = row_max(&qr[ns]);
-            let bootstrap = if reached { 0.0 } else { next_max };
-            let old = qr[s][a];
-            qr[s][a] = updated(old, reward, bootstrap, alpha, gamma);
+            let bootstrap = if reached { 0.0 } else { next_max.to_f64() };
+            let old = qr[s][a].to_f64();
+            qr[s][a] = V::from_f64(updated(old, reward, bootstrap, alpha, gamma));
             if !dirty && stamp[s] == gen && argmax_lowest(&qr[s]) != act[s] as usize {
                 dirty = true;
             }
@@ -866,18 +1096,18 @@ fn train_impl(
     } else {
         None
     };
-    let converged_episode = path_ok.then_some(last_change);
-    let length_converged_episode = path_ok.then_some(last_length_change);
-    Ok(TrainResult {
+    TrainResult {
         path: final_path,
         steps_per_episode,
         reached_per_episode,
-        converged_episode,
-        length_converged_episode,
+        converged_episode: path_ok.then_some(last_change),
+        length_converged_episode: path_ok.then_some(last_length_change),
         total_steps,
         wall_time_s: started.elapsed().as_secs_f64(),
-        q,
-    })
+        q: QTable {
+            rows: V::wrap(rows),
+        },
+    }
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //!
 //! Entry points:
 //! - [`TrainRequest`] — episodes, seed, assistance (eqs. 9 and 10, together or each on its
-//!   own), the step cap and the initial Q-table rule; [`TrainRequest::resolve`] against a scenario gives the
+//!   own), the step cap, the initial Q-table rule and the Q-values' precision; [`TrainRequest::resolve`] against a scenario gives the
 //!   [`TrainOptions`] of [`crate::qlearning::train`].
 //! - [`PlanRequest`] — a training request plus the re-plan cap and the path learner;
 //!   [`PlanRequest::resolve`] gives the [`PlanOptions`] and [`LearnerKind`] of
@@ -39,7 +39,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::qlearning::TrainOptions;
 use crate::replanning::PlanOptions;
-use crate::scenario::{InitialQ, Scenario};
+use crate::scenario::{InitialQ, QPrecision, Scenario};
 
 /// Overrides of a training run; `None` takes the scenario's `learning` value.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -68,6 +68,9 @@ pub struct TrainRequest {
     /// [`crate::qlearning::distance_bound_table`]); default the scenario's
     /// `learning.initial_q`.
     pub initial_q: Option<String>,
+    /// The type of the Q-values, by name: `"f64"` (the default) or `"f32"` (half the
+    /// memory per state); default the scenario's `learning.q_precision`.
+    pub q_precision: Option<String>,
 }
 
 /// The path learners [`PlanRequest::learner`] can name.
@@ -213,6 +216,9 @@ impl TrainRequest {
         if let Some(name) = &self.initial_q {
             opts.initial_q = InitialQ::from_name("initial_q", name)?;
         }
+        if let Some(name) = &self.q_precision {
+            opts.q_precision = QPrecision::from_name("q_precision", name)?;
+        }
         opts.validate()?;
         Ok(opts)
     }
@@ -314,6 +320,30 @@ mod tests {
             bad.resolve(&s).unwrap_err().to_string(),
             "invalid argument `initial_q` = optimistic: must be one of zero, distance"
         );
+    }
+
+    #[test]
+    fn q_precision_by_name() {
+        let s = s();
+        assert_eq!(
+            TrainRequest::default().resolve(&s).unwrap().q_precision,
+            QPrecision::F64
+        );
+        let f = TrainRequest {
+            q_precision: Some("f32".into()),
+            ..Default::default()
+        };
+        assert_eq!(f.resolve(&s).unwrap().q_precision, QPrecision::F32);
+        for name in ["f16", "F32", ""] {
+            let bad = TrainRequest {
+                q_precision: Some(name.into()),
+                ..Default::default()
+            };
+            assert_eq!(
+                bad.resolve(&s).unwrap_err().to_string(),
+                format!("invalid argument `q_precision` = {name}: must be one of f64, f32")
+            );
+        }
     }
 
     #[test]

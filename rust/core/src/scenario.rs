@@ -250,6 +250,9 @@ pub struct Learning {
     /// optimistic bound from the Manhattan distance to the target, see
     /// [`crate::qlearning`]).
     pub initial_q: InitialQ,
+    /// The type of the Q-values: `"f64"` (the paper's arithmetic, the default) or `"f32"`
+    /// (ours: half the memory per state; see [`crate::qlearning`]).
+    pub q_precision: QPrecision,
 }
 
 /// How the learner's Q-table starts (`learning.initial_q`).
@@ -310,6 +313,71 @@ impl From<InitialQ> for String {
     }
 }
 
+/// The type the learner stores its Q-values in (`learning.q_precision`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub enum QPrecision {
+    /// 64-bit floats (48 bytes of Q-values per state): the default of every scenario.
+    #[default]
+    F64,
+    /// Ours: 32-bit floats (24 bytes per state). Every update is computed in f64 as with
+    /// `F64` and its result rounded to the nearest f32 when stored.
+    F32,
+}
+
+impl QPrecision {
+    /// Every name, in the order of the docs.
+    pub const NAMES: &'static [&'static str] = &["f64", "f32"];
+
+    /// The name used in scenario files, requests, results and Q-table files.
+    pub fn name(self) -> &'static str {
+        match self {
+            QPrecision::F64 => "f64",
+            QPrecision::F32 => "f32",
+        }
+    }
+
+    /// Bytes of one Q-value (8 or 4).
+    pub fn value_bytes(self) -> usize {
+        match self {
+            QPrecision::F64 => 8,
+            QPrecision::F32 => 4,
+        }
+    }
+
+    /// The precision of a name (`"f64"`, `"f32"`); the error names `field` and the value
+    /// and lists the names.
+    pub fn from_name(field: &str, name: &str) -> Result<Self> {
+        match name {
+            "f64" => Ok(QPrecision::F64),
+            "f32" => Ok(QPrecision::F32),
+            _ => Err(Error::argument(
+                field,
+                name,
+                format!("must be one of {}", Self::NAMES.join(", ")),
+            )),
+        }
+    }
+}
+
+impl TryFrom<String> for QPrecision {
+    type Error = String;
+    fn try_from(name: String) -> std::result::Result<Self, String> {
+        QPrecision::from_name("learning.q_precision", &name).map_err(|_| {
+            format!(
+                "field `learning.q_precision` = {name}: must be one of {}",
+                Self::NAMES.join(", ")
+            )
+        })
+    }
+}
+
+impl From<QPrecision> for String {
+    fn from(p: QPrecision) -> String {
+        p.name().to_string()
+    }
+}
+
 impl Default for Learning {
     fn default() -> Self {
         Learning {
@@ -323,6 +391,7 @@ impl Default for Learning {
             assist_distance: true,
             seed: 0,
             initial_q: InitialQ::Zero,
+            q_precision: QPrecision::F64,
         }
     }
 }

@@ -15,7 +15,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 use sixaxis_core::qlearning::QTable;
-use sixaxis_core::scenario::{Scenario, BUILTIN_NAMES};
+use sixaxis_core::scenario::{QPrecision, Scenario, BUILTIN_NAMES};
 use sixaxis_core::GridWorld;
 
 fn knob(name: &str, default: u64) -> u64 {
@@ -273,14 +273,20 @@ fn qtable_bytes_from_mutations() {
     let dir = tempfile::tempdir().unwrap();
     let simple = GridWorld::new(&Scenario::builtin("paper_simple").unwrap()).unwrap();
     let other = GridWorld::new(&Scenario::builtin("replan_clutter").unwrap()).unwrap();
-    // A saved table of each world, values made distinct so flips change something.
+    // A saved table of each world in each precision (f64, f32), values made distinct so
+    // flips change something.
     let mut files = Vec::new();
     for (i, w) in [&simple, &other].into_iter().enumerate() {
         let n = w.num_states();
         let q = QTable::from_values(n, (0..n * 6).map(|k| k as f64 * 0.5 - 7.0).collect()).unwrap();
-        let p = dir.path().join(format!("q{i}.bin"));
-        q.save(&p, w).unwrap();
-        files.push(std::fs::read(&p).unwrap());
+        for (j, q) in [q.clone(), q.into_precision(QPrecision::F32).unwrap()]
+            .iter()
+            .enumerate()
+        {
+            let p = dir.path().join(format!("q{i}_{j}.bin"));
+            q.save(&p, w).unwrap();
+            files.push(std::fs::read(&p).unwrap());
+        }
     }
     fuzz(
         "Q-table bytes",
@@ -288,7 +294,8 @@ fn qtable_bytes_from_mutations() {
         |rng| {
             // Mostly paper_simple's own file (the header must pass to reach the body), some
             // of the other world's file (must be a mismatch, never accepted).
-            let mut b = files[usize::from(rng.random_bool(0.2))].clone();
+            let world = 2 * usize::from(rng.random_bool(0.2));
+            let mut b = files[world + usize::from(rng.random_bool(0.5))].clone();
             if rng.random_bool(0.5) {
                 // Flip bits in the header or the body...
                 for _ in 0..rng.random_range(1..4) {

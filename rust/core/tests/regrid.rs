@@ -7,7 +7,7 @@ use sixaxis_core::planner::PosePlanner;
 use sixaxis_core::qlearning::{train, TrainOptions};
 use sixaxis_core::regrid::regrid;
 use sixaxis_core::replanning::{plan, PlanOptions};
-use sixaxis_core::scenario::{DistanceTo, InitialQ, ObstacleBox};
+use sixaxis_core::scenario::{DistanceTo, InitialQ, ObstacleBox, QPrecision};
 use sixaxis_core::{Error, Scenario};
 
 /// Cells (as mm points) blocked by brute force: a cell is blocked when its centre is within
@@ -134,24 +134,25 @@ fn auto_episodes_find_the_bfs_optimum_at_each_size() {
     }
 }
 
-#[test]
-fn distance_initial_q_finds_the_bfs_optimum_at_each_size() {
-    // learning.initial_q = "distance" with --episodes auto: the optimum at every size, in
-    // far fewer environment steps than the paper's Q = 0 (measured in docs/PERFORMANCE.md).
+/// `learning.initial_q = "distance"` with `--episodes auto` and Q-values in `precision`:
+/// the BFS optimum at 100, 50, 25 and 12.5 mm, seeds 0 and 1, before the episode cap.
+fn distance_initial_q_finds_the_bfs_optimum(precision: QPrecision) {
     let s = Scenario::builtin("paper_simple").unwrap();
     for cell in [100.0, 50.0, 25.0, 12.5] {
         let r = regrid(&s, cell).unwrap();
         let w = GridWorld::new(&r).unwrap();
         let mut opts = TrainOptions::from_scenario(&r).auto();
         opts.initial_q = InitialQ::Distance;
+        opts.q_precision = precision;
         for seed in [0, 1] {
             opts.seed = seed;
             let t = train(&w, &opts, None, None).unwrap();
+            assert_eq!(t.q.precision(), precision);
             let path = t.path.expect("a path");
             assert_eq!(
                 path.len(),
                 w.shortest_path().unwrap().len(),
-                "{cell} mm seed {seed}"
+                "{cell} mm seed {seed} {precision:?}"
             );
             assert_eq!(path[0], r.start);
             assert_eq!(*path.last().unwrap(), r.target);
@@ -163,6 +164,20 @@ fn distance_initial_q_finds_the_bfs_optimum_at_each_size() {
             assert!((t.steps_per_episode.len() as u32) < opts.episodes);
         }
     }
+}
+
+#[test]
+fn distance_initial_q_finds_the_bfs_optimum_at_each_size() {
+    // The optimum at every size, in far fewer environment steps than the paper's Q = 0
+    // (measured in docs/PERFORMANCE.md).
+    distance_initial_q_finds_the_bfs_optimum(QPrecision::F64);
+}
+
+#[test]
+fn f32_distance_initial_q_finds_the_bfs_optimum_at_each_size() {
+    // The same with f32 Q-values (learning.q_precision = "f32"); how often f32 and f64
+    // learn the same path: docs/PERFORMANCE.md.
+    distance_initial_q_finds_the_bfs_optimum(QPrecision::F32);
 }
 
 #[test]

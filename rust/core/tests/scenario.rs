@@ -3,7 +3,7 @@
 
 use proptest::prelude::*;
 use serde_json::{json, Value};
-use sixaxis_core::scenario::{InitialQ, Scenario, BUILTIN_NAMES};
+use sixaxis_core::scenario::{InitialQ, QPrecision, Scenario, BUILTIN_NAMES};
 use sixaxis_core::Error;
 
 fn base() -> Value {
@@ -282,6 +282,41 @@ fn initial_q_rule_is_validated() {
     v["learning"]["initial_q"] = json!(0);
     let e = parse(&v).unwrap_err().to_string();
     assert!(e.contains("scenario could not be parsed"), "{e}");
+}
+
+#[test]
+fn q_precision_is_validated() {
+    for p in [QPrecision::F64, QPrecision::F32] {
+        let mut v = base();
+        v["learning"]["q_precision"] = json!(p.name());
+        assert_eq!(parse(&v).unwrap().learning.q_precision, p);
+    }
+    // Absent: f64, so every file written before the field existed means the same run.
+    let mut v = base();
+    assert!(v["learning"]
+        .as_object_mut()
+        .unwrap()
+        .remove("q_precision")
+        .is_some());
+    assert_eq!(parse(&v).unwrap().learning.q_precision, QPrecision::F64);
+    for s in BUILTIN_NAMES {
+        let sc = Scenario::builtin(s).unwrap();
+        assert_eq!(sc.learning.q_precision, QPrecision::F64, "{s}");
+    }
+    for bad in ["f16", "double", ""] {
+        let mut v = base();
+        v["learning"]["q_precision"] = json!(bad);
+        let e = parse(&v).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!(
+                "`learning.q_precision` = {bad}: must be one of f64, f32"
+            )),
+            "{e}"
+        );
+    }
+    let mut v = base();
+    v["learning"]["q_precision"] = json!(32);
+    assert!(parse(&v).is_err());
 }
 
 #[test]

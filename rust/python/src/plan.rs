@@ -289,7 +289,9 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
 /// Keywords as :func:`train` (``None`` takes the scenario's ``learning`` value;
 /// ``assist`` switches eqs. 9 and 10 together, ``detour`` / ``distance`` each on its own);
 /// ``initial_q`` names how each round's Q-table starts (``"zero"``, the paper's, or
-/// ``"distance"``; default the scenario's ``learning.initial_q``);
+/// ``"distance"``; default the scenario's ``learning.initial_q``); ``q_precision`` the type
+/// of each round's Q-values (``"f64"``, the default, or ``"f32"``, half the memory; default
+/// the scenario's ``learning.q_precision``);
 /// ``max_replans`` defaults to the scenario's ``planning.max_replans``. ``learner`` is
 /// ``"qlearning"`` (default, the paper's), ``"bfs"`` (breadth-first shortest path), or a
 /// Python callable ``learner(scenario, seed)`` / an object with a ``learn_path(scenario,
@@ -302,7 +304,7 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
 /// is returned with ``success=False`` and a ``failure`` reason; bad arguments raise
 /// :class:`InvalidArgumentError`. The GIL is released while the core works.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, seed=None, episodes=None, episode_cap=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, initial_q=None, max_replans=None, learner=None))]
+#[pyo3(signature = (scenario=None, *, seed=None, episodes=None, episode_cap=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, initial_q=None, q_precision=None, max_replans=None, learner=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
@@ -315,6 +317,7 @@ pub fn plan(
     distance: Option<&Bound<'_, PyAny>>,
     max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     initial_q: Option<&Bound<'_, PyAny>>,
+    q_precision: Option<&Bound<'_, PyAny>>,
     max_replans: Option<&Bound<'_, PyAny>>,
     learner: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyPlanResult> {
@@ -330,6 +333,7 @@ pub fn plan(
             distance,
             max_steps_per_episode,
             initial_q,
+            q_precision,
         )?,
         max_replans: int_kw(py, MAX_REPLANS, max_replans)?,
         learner: None,

@@ -71,6 +71,7 @@ pub fn train_request(
     distance: Option<&Bound<'_, PyAny>>,
     max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     initial_q: Option<&Bound<'_, PyAny>>,
+    q_precision: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<TrainRequest> {
     // `episodes="auto"`: train until the greedy path settles (the core's rule).
     let auto = match episodes {
@@ -95,6 +96,12 @@ pub fn train_request(
             "initial_q",
             initial_q,
             "must be \"zero\", \"distance\" or None",
+        )?,
+        q_precision: str_kw(
+            py,
+            "q_precision",
+            q_precision,
+            "must be \"f64\", \"f32\" or None",
         )?,
     })
 }

@@ -100,14 +100,17 @@ impl PyTrainResult {
     fn episodes(&self) -> u32 {
         self.episodes
     }
-    /// The learned Q-table, ``(num_states, 6)`` float64 (a copy); row ``s`` is the state of
-    /// cell ``state_cells[s]``, columns the actions ``+x -x +y -y +z -z``.
+    /// The learned Q-table, ``(num_states, 6)``, float64 or float32 as the run's
+    /// ``q_precision`` (a copy); row ``s`` is the state of cell ``state_cells[s]``, columns
+    /// the actions ``+x -x +y -y +z -z``.
     #[getter]
-    fn q<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let n = self.q.num_states();
-        let a = Array2::from_shape_vec((n, 6), self.q.values().to_vec())
-            .map_err(|e| invalid_argument(py, "q", "shape", e.to_string()))?;
-        Ok(a.into_pyarray(py))
+    fn q<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        q_array(py, &self.q)
+    }
+    /// The type of the Q-values: ``"f64"`` or ``"f32"``.
+    #[getter]
+    fn q_precision(&self) -> &'static str {
+        self.q.precision().name()
     }
     /// The cell of every state, ``(num_states, 3)`` int32.
     #[getter]
@@ -166,31 +169,72 @@ fn world_of(
     run_attached(py, || GridWorld::with_extra_obstacles(s, &extra))
 }
 
+/// A Q-table as a ``(num_states, 6)`` array of its own dtype (float64 or float32).
+fn q_array<'py>(py: Python<'py>, q: &QTable) -> PyResult<Bound<'py, PyAny>> {
+    let shape = (q.num_states(), 6);
+    let bad_shape =
+        |e: numpy::ndarray::ShapeError| invalid_argument(py, "q", "shape", e.to_string());
+    Ok(match (q.values_f64(), q.values_f32()) {
+        (Some(v), _) => Array2::from_shape_vec(shape, v.to_vec())
+            .map_err(bad_shape)?
+            .into_pyarray(py)
+            .into_any(),
+        (None, Some(v)) => Array2::from_shape_vec(shape, v.to_vec())
+            .map_err(bad_shape)?
+            .into_pyarray(py)
+            .into_any(),
+        (None, None) => unreachable!("a table is f64 or f32"),
+    })
+}
+
+/// A ``(num_states, 6)`` float64 or float32 array as a Q-table of that precision; errors
+/// name it `name`, and anything but such an array is rejected with `reason`.
 fn q_from_array(
     py: Python<'_>,
-    arr: PyReadonlyArray2<'_, f64>,
+    obj: &Bound<'_, PyAny>,
     world: &GridWorld,
+    name: &str,
+    reason: &str,
 ) -> PyResult<QTable> {
-    let shape = arr.shape().to_vec();
+    let (shape, table) = if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, f64>>() {
+        let values: Vec<f64> = a.as_array().iter().copied().collect();
+        let finite = values.iter().all(|v| v.is_finite());
+        (a.shape().to_vec(), finite.then_some(Table::F64(values)))
+    } else if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, f32>>() {
+        let values: Vec<f32> = a.as_array().iter().copied().collect();
+        let finite = values.iter().all(|v| v.is_finite());
+        (a.shape().to_vec(), finite.then_some(Table::F32(values)))
+    } else {
+        return Err(invalid_argument(py, name, repr(obj), reason));
+    };
     if shape[1] != 6 || shape[0] != world.num_states() {
         return Err(crate::errors::to_py(
             py,
             sixaxis_core::Error::QTableMismatch(format!(
-                "initial_q has shape {shape:?}, the world needs ({}, 6)",
+                "{name} has shape {shape:?}, the world needs ({}, 6)",
                 world.num_states()
             )),
         ));
     }
-    let values: Vec<f64> = arr.as_array().iter().copied().collect();
-    if values.iter().any(|v| !v.is_finite()) {
+    let Some(table) = table else {
         return Err(invalid_argument(
             py,
-            "initial_q",
+            name,
             "array",
             "every value must be finite",
         ));
-    }
-    run_attached(py, || QTable::from_values(world.num_states(), values))
+    };
+    let n = world.num_states();
+    run_attached(py, || match table {
+        Table::F64(v) => QTable::from_values(n, v),
+        Table::F32(v) => QTable::from_values_f32(n, v),
+    })
+}
+
+/// The values of an array given as a Q-table.
+enum Table {
+    F64(Vec<f64>),
+    F32(Vec<f32>),
 }
 
 /// Learn a path with tabular Q-learning (eqs. 6-8) on a scenario.
@@ -201,11 +245,15 @@ fn q_from_array(
 /// switches eqs. 9 and 10 together, ``detour`` (eq. 9) and ``distance`` (eq. 10) each on its
 /// own (after ``assist``). ``initial_q`` is how the Q-table starts: ``"zero"`` (the
 /// paper's), ``"distance"`` (an optimistic bound from the Manhattan distance to the target,
-/// see docs/SCENARIOS.md), or a ``(num_states, 6)`` array to resume from (default the
-/// scenario's ``learning.initial_q``). ``progress(episodes_done)`` is called about 100 times; an
+/// see docs/SCENARIOS.md), or a ``(num_states, 6)`` float64 or float32 array to resume from
+/// (default the scenario's ``learning.initial_q``). ``q_precision`` is the type of the
+/// Q-values: ``"f64"`` (the default) or ``"f32"`` (half the memory per state; updates are
+/// computed in f64 and stored rounded); a table given as ``initial_q`` is converted to it
+/// (default the scenario's ``learning.q_precision``). ``progress(episodes_done)`` is called
+/// about 100 times; an
 /// exception it raises is re-raised after training. The GIL is released while learning.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, episodes=None, episode_cap=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, progress=None))]
+#[pyo3(signature = (scenario=None, *, episodes=None, episode_cap=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, q_precision=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
@@ -219,6 +267,7 @@ pub fn train(
     max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     extra_obstacles: Option<&Bound<'_, PyAny>>,
     initial_q: Option<&Bound<'_, PyAny>>,
+    q_precision: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
@@ -237,20 +286,15 @@ pub fn train(
         distance,
         max_steps_per_episode,
         rule,
+        q_precision,
     )?;
     let opts = run_attached(py, || req.resolve(&s))?;
     let world = world_of(py, &s, extra_obstacles)?;
     let q0 = table
         .map(|o| {
-            let a = o.extract::<PyReadonlyArray2<'_, f64>>().map_err(|_| {
-                invalid_argument(
-                    py,
-                    "initial_q",
-                    repr(o),
-                    "must be \"zero\", \"distance\", a (num_states, 6) float64 array or None",
-                )
-            })?;
-            q_from_array(py, a, &world)
+            let reason = "must be \"zero\", \"distance\", a (num_states, 6) float64 or \
+                          float32 array or None";
+            q_from_array(py, o, &world, "initial_q", reason)
         })
         .transpose()?;
     let cb_error: Mutex<Option<PyErr>> = Mutex::new(None);
@@ -299,7 +343,7 @@ pub fn train(
 
 /// Load a Q-table file saved by :meth:`TrainResult.save_q` (or the CLI) for a scenario;
 /// raises :class:`QTableMismatchError` if it was learned on another grid or target.
-/// Returns the ``(num_states, 6)`` array.
+/// Returns the ``(num_states, 6)`` array, float64 or float32 as the file stores it.
 #[pyfunction]
 #[pyo3(signature = (path, scenario=None, *, extra_obstacles=None))]
 pub fn load_q<'py>(
@@ -307,29 +351,33 @@ pub fn load_q<'py>(
     path: std::path::PathBuf,
     scenario: Option<&Bound<'py, PyAny>>,
     extra_obstacles: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
+) -> PyResult<Bound<'py, PyAny>> {
     let s = scenario_from_any(py, scenario)?;
     let world = world_of(py, &s, extra_obstacles)?;
     let q = run(py, || QTable::load(&path, &world))?;
-    let n = q.num_states();
-    let a = Array2::from_shape_vec((n, 6), q.values().to_vec())
-        .map_err(|e| invalid_argument(py, "q", "shape", e.to_string()))?;
-    Ok(a.into_pyarray(py))
+    q_array(py, &q)
 }
 
-/// The greedy path (eq. 8) of a Q-table array on a scenario: list of cells, or None.
+/// The greedy path (eq. 8) of a Q-table array (float64 or float32) on a scenario: list of
+/// cells, or None.
 #[pyfunction]
 #[pyo3(signature = (q, scenario=None, *, max_steps=None, extra_obstacles=None))]
 pub fn greedy_path_of<'py>(
     py: Python<'py>,
-    q: PyReadonlyArray2<'py, f64>,
+    q: &Bound<'py, PyAny>,
     scenario: Option<&Bound<'py, PyAny>>,
     max_steps: Option<u32>,
     extra_obstacles: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Option<Vec<Bound<'py, PyTuple>>>> {
     let s = scenario_from_any(py, scenario)?;
     let world = world_of(py, &s, extra_obstacles)?;
-    let qt = q_from_array(py, q, &world)?;
+    let qt = q_from_array(
+        py,
+        q,
+        &world,
+        "q",
+        "must be a (num_states, 6) float64 or float32 array",
+    )?;
     let cap = max_steps.unwrap_or(s.learning.max_steps_per_episode);
     greedy_path(&world, &qt, cap)
         .map(|p| p.iter().map(|c| PyTuple::new(py, c)).collect())
