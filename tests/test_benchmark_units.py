@@ -224,18 +224,29 @@ def test_dqn_search_space_keeps_the_replay_ratio_at_most_one_half():
 # -- hyperparameters and tuning -----------------------------------------------------------------
 
 
-def test_placeholder_hyperparams_say_defaults_and_run_reads_the_file(tmp_path):
+def test_shipped_hyperparams_are_tuned_with_provenance_and_run_reads_the_file(tmp_path):
     data = hpmod.load("v1")
-    assert data["status"] == "defaults" and "PLACEHOLDER" in data["note"]
-    assert hpmod.status_for(data, "ppo") == "defaults"
+    assert data["status"] == "tuned" and "PLACEHOLDER" not in data["note"]
+    tuning_tasks = {t.id for t in load_suite("v1").tuning_tasks}
+    reported = {t.id for t in load_suite("v1").tasks}
+    for lr in hpmod.TUNABLE:
+        assert hpmod.status_for(data, lr) == "tuned"
+        t = data["learners"][lr]["tuning"]
+        assert t["command"].startswith("python -m sixaxis_avoid.benchmark tune --suite v1")
+        assert t["trials"] >= 6 and 0.0 < t["best_value"] <= 1.0
+        assert set(t["tasks"]) == tuning_tasks and not tuning_tasks & reported
     suite = load_suite("quick")
     spec = plan_runs(suite, ["ppo"], seeds=[0])[0]
-    assert spec["hyperparams_status"] == "defaults"
+    assert spec["hyperparams_status"] == "tuned"
+    assert (
+        spec["hyperparams"]["learning_rate"] == data["learners"]["ppo"]["values"]["learning_rate"]
+    )
     hp_file = tmp_path / "hp.json"
     hpmod.record_tuning(hp_file, "ppo", {"ent_coef": 0.123}, {"command": "x", "trials": 1})
     spec = plan_runs(suite, ["ppo"], seeds=[0], hyperparams=hp_file)[0]
     assert spec["hyperparams_status"] == "tuned"
     assert spec["hyperparams"]["ent_coef"] == 0.123
+    assert "PLACEHOLDER" not in json.loads(hp_file.read_text())["note"]
 
 
 def test_tune_writes_the_chosen_values_with_command_and_trials(tmp_path):

@@ -59,7 +59,11 @@ def record_tuning(
     """Write a learner's tuned values (other learners' entries stay)."""
     data = load(path)
     data.pop("path", None)
-    data.setdefault("note", "")
+    if data.get("note", "").startswith("PLACEHOLDER") or not data.get("note"):
+        data["note"] = (
+            "Chosen by `python -m sixaxis_avoid.benchmark tune`; each learner's entry records "
+            "the command, trial count, objective and tasks of its study."
+        )
     data["learners"][learner] = {"status": "tuned", "values": values, "tuning": tuning}
     statuses = {status_for(data, k) for k in data["learners"]}
     data["status"] = "tuned" if statuses == {"tuned"} else "partly tuned"
