@@ -298,6 +298,12 @@ def plateau_section(a: dict[str, Any]) -> list[str]:
     ]
 
 
+def run_hours(runs: list[dict[str, Any]]) -> float:
+    """Hours of one core the runs took: each run's wall time (training, evaluations and
+    Algorithm 2), summed; unlike the driver's wall time it survives restarts."""
+    return sum(r["timing"].get("run_wall_time_s", r["timing"]["wall_time_s"]) for r in runs) / 3600
+
+
 def run_commands(a: dict[str, Any]) -> list[str]:
     """The commands that made this study: the tuning runs recorded in the hyperparameter
     file, the study's own command, and a cluster-sized variant of it."""
@@ -410,7 +416,8 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
         f"Suite **{suite['name']}** version {suite['version']}: {suite.get('description', '')} "
         f"{len(a['tasks'])} tasks x {len(a['seeds'])} seeds x {len(learners)} learners = "
         f"{len(a['runs'])} runs, each a Ray task ({m['ray']}). Run {m['date']} on "
-        f"{m['machine']}; total wall time {m['wall_time_s_total']:.0f} s; load average at the "
+        f"{m['machine']}; the runs took {run_hours(a['runs']):.1f} core-hours (each run's own wall "
+        "time, summed); load average at the "
         f"end {m['load_average']}. Versions: "
         + ", ".join(f"{k} {v}" for k, v in m["versions"].items())
         + ".",
