@@ -59,7 +59,7 @@ def record_tuning(
     """Write a learner's tuned values (other learners' entries stay)."""
     data = load(path)
     data.pop("path", None)
-    if data.get("note", "").startswith("PLACEHOLDER") or not data.get("note"):
+    if not data.get("note"):
         data["note"] = (
             "Chosen by `python -m sixaxis_avoid.benchmark tune`; each learner's entry records "
             "the command, trial count, objective and tasks of its study."
