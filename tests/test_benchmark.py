@@ -145,3 +145,47 @@ def test_report_from_the_quick_suite(local, tmp_path):
     for lr, s in agg.items():
         assert s["iqm_ci"][0] <= s["iqm"] <= s["iqm_ci"][1], lr
         assert abs(s["optimality_gap"] - (1 - s["mean"])) < 1e-9, lr
+
+
+def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
+    """`run --budget-scale` into a second directory, filled by two commands (the manifest keeps
+    both and the union of their learners), then `report --longer` sets it beside the study."""
+    from sixaxis_avoid.benchmark.__main__ import main
+
+    out, runs = local
+    longer = tmp_path / "x3"
+    common = ["run", "--suite", "quick", "--budget-scale", "3", "--no-ray", "--no-progress"]
+    assert main([*common, "--learners", "ppo", "--out-dir", str(longer)]) == 0
+    assert main([*common, "--learners", "dqn", "--seeds", "1", "--out-dir", str(longer)]) == 0
+    manifest = json.loads((longer / "study.json").read_text())
+    assert manifest["learners"] == ["ppo", "dqn"] and manifest["seeds"] == [0, 1]
+    assert len(manifest["commands"]) == 2 and "--learners dqn" in manifest["commands"][1]
+    for r in runner.load_runs(longer):
+        base = runs[r["key"]]["spec"]["budget"]
+        assert r["spec"]["budget"] == 3 * base and r["result"]["env_steps"] >= 3 * base
+
+    md = tmp_path / "BENCHMARKS.md"
+    a = write_report(out, md, reps=100, longer=longer)
+    text = md.read_text()
+    lo = a["longer"]
+    assert list(lo["learners"]) == ["ppo", "dqn"] and lo["scale"] == 3.0
+    assert lo["learners"]["ppo"]["seeds"] == [0, 1] and lo["learners"]["dqn"]["seeds"] == [0]
+    # x1 is the reported study's own runs on the same seeds; the longer side is the new runs.
+    ppo = lo["learners"]["ppo"]
+    x1 = [runs[f"{t}__ppo__s{s}"]["result"]["score"] for t in a["tasks"] for s in (0, 1)]
+    assert ppo["agg"]["learners"]["x1"]["mean"] == pytest.approx(sum(x1) / len(x1))
+    p = ppo["poi_long_over_x1"]
+    assert 0.0 <= p["ci"][0] <= p["p"] <= p["ci"][1] <= 1.0
+    assert ppo["agg"]["learners"]["best"]["mean"] >= ppo["agg"]["learners"]["long"]["mean"]
+    # Deep learners not run longer get a cost estimate from their own x1 run time.
+    assert set(lo["not_run"]) == {"a2c", "qrdqn"}
+    assert "## Longer budgets (x3)" in text and "| ppo | 2 | 900 |" in text
+    assert manifest["commands"][1] in text
+    png = tmp_path / "figures" / "bench" / "bench_longer.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/bench_longer.png" in text
+    # A directory without results is a clear error, not a traceback.
+    (tmp_path / "empty").mkdir()
+    rc = main(
+        ["report", "--results", str(out), "--out", str(md), "--longer", str(tmp_path / "empty")]
+    )
+    assert rc == 2 and "no result files" in capsys.readouterr().err

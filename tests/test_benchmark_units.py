@@ -188,7 +188,7 @@ def test_curve_on_is_a_step_function():
 
 
 def test_plateau_reads_each_run_at_a_quarter_half_and_end():
-    from sixaxis_avoid.benchmark.report import plateau
+    from sixaxis_avoid.benchmark.stats import plateau
 
     def run(learner, curve):
         pts = [{"env_steps": x, "score": y} for x, y in curve]
@@ -198,16 +198,23 @@ def test_plateau_reads_each_run_at_a_quarter_half_and_end():
         run("flat", [(10, 1.0), (50, 1.0), (100, 1.0)]),  # optimal from the start
         run("late", [(10, 0.0), (50, 0.0), (80, 0.5), (100, 1.0)]),  # rises after half
         run("late", [(10, 0.0), (30, 1.0), (100, 1.0)]),  # flat after a quarter
+        run("lost", [(10, 0.0), (30, 1.0), (70, 0.5), (100, 0.0)]),  # found, then lost
     ]
-    got = plateau({"learners": ["flat", "late"], "runs": runs})
+    got = plateau(runs, ["flat", "late", "lost"])
     assert got["flat"] == {
         "runs": 1, "quarter": 1.0, "half": 1.0, "end": 1.0, "changed_late": 0.0,
+        "best": 1.0, "fell_from_best": 0.0,
     }  # fmt: skip
     assert got["late"]["runs"] == 2
     assert got["late"]["quarter"] == pytest.approx(0.0)  # 25 steps: both still at 0
     assert got["late"]["half"] == pytest.approx(0.5)  # 50 steps: 0 and 1
     assert got["late"]["end"] == pytest.approx(1.0)
     assert got["late"]["changed_late"] == pytest.approx(0.5)
+    assert got["late"]["best"] == 1.0 and got["late"]["fell_from_best"] == 0.0
+    assert got["lost"] == {
+        "runs": 1, "quarter": 0.0, "half": 1.0, "end": 0.0, "changed_late": 1.0,
+        "best": 1.0, "fell_from_best": 1.0,
+    }  # fmt: skip
 
 
 def test_dqn_search_space_keeps_the_replay_ratio_at_most_one_half():

@@ -6,6 +6,7 @@ python -m sixaxis_avoid.benchmark run --suite v1                # the reported s
 python -m sixaxis_avoid.benchmark run --suite v1 --address auto # on a Ray cluster
 python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30   # Optuna, tuning tasks only
 python -m sixaxis_avoid.benchmark report --results results/bench/v1
+python -m sixaxis_avoid.benchmark report --results results/bench/v1 --longer results/bench/v1-x10
 """
 
 from __future__ import annotations
@@ -40,6 +41,11 @@ def parse_seeds(text: str | None) -> list[int] | None:
 
 def split(text: str) -> list[str]:
     return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def union(first: list[str], then: list[str]) -> list[str]:
+    """``first`` followed by the items of ``then`` not in it, order kept."""
+    return list(dict.fromkeys([*first, *then]))
 
 
 def add_ray_args(p: argparse.ArgumentParser) -> None:
@@ -86,6 +92,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     rep.add_argument("--out", type=Path, default=Path("docs/BENCHMARKS.md"))
     rep.add_argument("--figures-dir", type=Path, help="default: OUT's folder / figures/bench")
     rep.add_argument("--reps", type=int, default=2000, help="bootstrap replications")
+    rep.add_argument(
+        "--longer",
+        type=Path,
+        help="results of the same suite at a larger --budget-scale, set beside the study",
+    )
 
     ls = sub.add_parser("list", help="suites, learners and a suite's tasks")
     ls.add_argument("--suite", default="v1")
@@ -129,14 +140,21 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     previous: dict[str, Any] = {}
     if manifest_path.exists():
         previous = json.loads(manifest_path.read_text())
+    # A study directory can be filled by several commands (more seeds, another learner, a
+    # restart): the manifest keeps every command and the union of what they asked for.
+    command = command_line(argv)
+    commands = list(previous.get("commands", [previous["command"]] if previous else []))
+    if not commands or commands[-1] != command:
+        commands.append(command)
     runner.write_manifest(
         out,
         {
-            "command": command_line(argv),
+            "command": command,
+            "commands": commands,
             "suite": suite.raw,
-            "learners": learners,
-            "tasks": [t.id for t in (tasks or suite.tasks)],
-            "seeds": sorted({s["seed"] for s in specs}),
+            "learners": union(previous.get("learners", []), learners),
+            "tasks": union(previous.get("tasks", []), [t.id for t in (tasks or suite.tasks)]),
+            "seeds": sorted(set(previous.get("seeds", [])) | {s["seed"] for s in specs}),
             "runs": res["runs"],
             "ran_now": res["ran"],
             "skipped_now": res["skipped"],
@@ -197,7 +215,13 @@ def main(argv: list[str] | None = None) -> int:
         if args.cmd == "report":
             from sixaxis_avoid.benchmark.report import write_report
 
-            write_report(args.results, args.out, args.figures_dir, reps=args.reps)
+            try:
+                write_report(
+                    args.results, args.out, args.figures_dir, reps=args.reps, longer=args.longer
+                )
+            except (ValueError, FileNotFoundError) as e:  # a results directory it cannot use
+                print(f"error: {e}", file=sys.stderr)
+                return 2
             print(f"wrote {args.out}", file=sys.stderr)
             return 0
     except (SuiteError, lmod.LearnerError) as e:

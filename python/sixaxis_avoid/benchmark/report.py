@@ -20,6 +20,7 @@ from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.learners import BUILTIN
+from sixaxis_avoid.benchmark.longer import analyse_longer, longer_figure, longer_section
 from sixaxis_avoid.benchmark.runner import load_runs, task_of
 
 COLORS = {
@@ -249,31 +250,8 @@ def hyperparam_section(a: dict[str, Any]) -> list[str]:
 
 
 def plateau(a: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """Per learner, whether the curves had flattened by the end of the budget: the mean score
-    at a quarter, half and all of each run's env steps, and the fraction of runs whose score
-    still changed in the second half of their budget."""
-    out: dict[str, dict[str, Any]] = {}
-    for lr in a["learners"]:
-        at: list[np.ndarray] = []
-        for r in a["runs"]:
-            if r["spec"]["learner"] != lr or not r["result"]["curve"]:
-                continue
-            end = max(p["env_steps"] for p in r["result"]["curve"])
-            q, h, e = stats.curve_on(np.array([end / 4, end / 2, end]), r["result"]["curve"])
-            # Still changing: a checkpoint after end/2 differs from the score at end/2.
-            late = [p["score"] for p in r["result"]["curve"] if p["env_steps"] > end / 2]
-            changed = any(abs(v - h) > 1e-12 for v in late)
-            at.append(np.array([q, h, e, float(changed)]))
-        if at:
-            m = np.mean(at, axis=0)
-            out[lr] = {
-                "runs": len(at),
-                "quarter": float(m[0]),
-                "half": float(m[1]),
-                "end": float(m[2]),
-                "changed_late": float(m[3]),
-            }
-    return out
+    """Per learner of ``a``, whether its curves had flattened (see :func:`stats.plateau`)."""
+    return stats.plateau(a["runs"], a["learners"])
 
 
 def plateau_section(a: dict[str, Any]) -> list[str]:
@@ -285,13 +263,17 @@ def plateau_section(a: dict[str, Any]) -> list[str]:
         "env steps, and the fraction of runs whose score still changed in the second half of "
         "their budget. A learner whose score still rises from half to full budget, or changes "
         "late in many runs, has not plateaued: its figures are a lower bound on what it can do "
-        "with more samples (the cluster command under *How to run* scales every budget).",
+        "with more samples (the cluster command under *How to run* scales every budget; "
+        "*Longer budgets*, where present, measures it). *best*: the mean of each run's best "
+        "checkpoint score; *ended below best*: runs that found a better path than the one "
+        "they ended with.",
         "",
-        "| learner | runs | score at 1/4 | at 1/2 | at end | runs still changing after 1/2 |",
-        "|---|---|---|---|---|---|",
+        "| learner | runs | score at 1/4 | at 1/2 | at end | runs still changing after 1/2 "
+        "| best | ended below best |",
+        "|---|---|---|---|---|---|---|---|",
         *[
             f"| {lr} | {v['runs']} | {v['quarter']:.3f} | {v['half']:.3f} | {v['end']:.3f} | "
-            f"{v['changed_late']:.2f} |"
+            f"{v['changed_late']:.2f} | {v['best']:.3f} | {v['fell_from_best']:.2f} |"
             for lr, v in rows.items()
         ],
         "",
@@ -372,7 +354,12 @@ def table(rows: dict[str, dict[str, Any]], label: str) -> list[str]:
     return out
 
 
-def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
+def markdown(
+    a: dict[str, Any],
+    figs: dict[str, Path],
+    out_path: Path,
+    longer: dict[str, Any] | None = None,
+) -> str:
     m = a["manifest"]
     suite = m["suite"]
     agg = a["agg"]
@@ -472,6 +459,7 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
         *poi_rows,
         "",
         *plateau_section(a),
+        *(longer_section(longer, rel.get("longer")) if longer is not None else []),
         "## Per learner (all tasks)",
         "",
         *table({"all": a["per"]}, "tasks"),
@@ -525,13 +513,26 @@ def markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) -> str:
 
 
 def write_report(
-    results: Path, out: Path, figures_dir: Path | None = None, reps: int = stats.REPS
+    results: Path,
+    out: Path,
+    figures_dir: Path | None = None,
+    reps: int = stats.REPS,
+    longer: Path | None = None,
 ) -> dict[str, Any]:
+    """Write the report ``out`` and its figures from the study in ``results``; with
+    ``longer``, a second study of the same suite at a larger ``--budget-scale`` is set beside
+    it (section *Longer budgets*)."""
     results, out = Path(results), Path(out)
     figures_dir = Path(figures_dir) if figures_dir else out.parent / "figures" / "bench"
     a = analyse(results, reps)
     figs = figures(a, figures_dir)
-    atomic_write_text(out, markdown(a, figs, out))
+    lo = None
+    if longer is not None:
+        lo = analyse_longer(a, Path(longer), reps)
+        if lo["learners"]:
+            figs["longer"] = longer_figure(lo, figures_dir / "bench_longer.png", COLORS)
+        a["longer"] = lo
+    atomic_write_text(out, markdown(a, figs, out, lo))
     summary = {
         "learners": a["learners"],
         "tasks": a["tasks"],
@@ -540,5 +541,13 @@ def write_report(
         "per_learner": a["per"],
         "per_group": a["per_group"],
     }
+    if lo is not None:
+        summary["longer"] = {
+            lr: {k: v[k] for k in ("seeds", "scale", "budget_env_steps", "poi_long_over_x1",
+                                   "plateau_x1", "plateau_long", "per_task", "core_hours")}
+            | {"aggregates": {x: {k: y[k] for k in ("iqm", "iqm_ci", "mean", "mean_ci")}
+                              for x, y in v["agg"]["learners"].items()}}
+            for lr, v in lo["learners"].items()
+        }  # fmt: skip
     atomic_write_text(figures_dir / "bench_summary.json", json.dumps(summary, indent=1) + "\n")
     return a

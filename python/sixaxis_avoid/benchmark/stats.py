@@ -195,3 +195,35 @@ def per_learner(runs: list[dict[str, Any]]) -> dict[str, Any]:
         else None,
         "replans_mean": float(np.mean([a["replans"] for a in alg2_ok])) if alg2_ok else None,
     }
+
+
+def plateau(runs: list[dict[str, Any]], learners: list[str]) -> dict[str, dict[str, Any]]:
+    """Per learner, whether the curves had flattened by the end of the budget: the mean score
+    at a quarter, half and all of each run's env steps; the fraction of runs whose score
+    still changed in the second half of their budget; the mean of each run's best checkpoint
+    score and the fraction of runs that ended below their best (found a path, then lost it)."""
+    out: dict[str, dict[str, Any]] = {}
+    for lr in learners:
+        at: list[np.ndarray] = []
+        for r in runs:
+            if r["spec"]["learner"] != lr or not r["result"]["curve"]:
+                continue
+            end = max(p["env_steps"] for p in r["result"]["curve"])
+            q, h, e = curve_on(np.array([end / 4, end / 2, end]), r["result"]["curve"])
+            # Still changing: a checkpoint after end/2 differs from the score at end/2.
+            late = [p["score"] for p in r["result"]["curve"] if p["env_steps"] > end / 2]
+            changed = any(abs(v - h) > 1e-12 for v in late)
+            best = max(p["score"] for p in r["result"]["curve"])
+            at.append(np.array([q, h, e, float(changed), best, float(e < best - 1e-12)]))
+        if at:
+            m = np.mean(at, axis=0)
+            out[lr] = {
+                "runs": len(at),
+                "quarter": float(m[0]),
+                "half": float(m[1]),
+                "end": float(m[2]),
+                "changed_late": float(m[3]),
+                "best": float(m[4]),
+                "fell_from_best": float(m[5]),
+            }
+    return out
