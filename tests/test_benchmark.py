@@ -156,7 +156,8 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     longer = tmp_path / "x3"
     common = ["run", "--suite", "quick", "--budget-scale", "3", "--no-ray", "--no-progress"]
     assert main([*common, "--learners", "ppo", "--out-dir", str(longer)]) == 0
-    assert main([*common, "--learners", "dqn", "--seeds", "1", "--out-dir", str(longer)]) == 0
+    dqn = ["--learners", "dqn", "--seeds", "1", "--set", "dqn.lr_schedule=linear"]
+    assert main([*common, *dqn, "--out-dir", str(longer)]) == 0
     manifest = json.loads((longer / "study.json").read_text())
     assert manifest["learners"] == ["ppo", "dqn"] and manifest["seeds"] == [0, 1]
     assert len(manifest["commands"]) == 2 and "--learners dqn" in manifest["commands"][1]
@@ -167,7 +168,7 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     md = tmp_path / "BENCHMARKS.md"
     a = write_report(out, md, reps=100, longer=longer)
     text = md.read_text()
-    lo = a["longer"]
+    (lo,) = a["longer"]
     assert list(lo["learners"]) == ["ppo", "dqn"] and lo["scale"] == 3.0
     assert lo["learners"]["ppo"]["seeds"] == [0, 1] and lo["learners"]["dqn"]["seeds"] == [0]
     # x1 is the reported study's own runs on the same seeds; the longer side is the new runs.
@@ -177,9 +178,13 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     p = ppo["poi_long_over_x1"]
     assert 0.0 <= p["ci"][0] <= p["p"] <= p["ci"][1] <= 1.0
     assert ppo["agg"]["learners"]["best"]["mean"] >= ppo["agg"]["learners"]["long"]["mean"]
+    # A --set override is named with the section; ppo ran as tuned.
+    assert lo["learners"]["dqn"]["changed"] == {"lr_schedule": "linear"}
+    assert lo["learners"]["ppo"]["changed"] == {}
+    assert '## Longer budgets (x3, dqn: `lr_schedule`="linear")' in text
     # Deep learners not run longer get a cost estimate from their own x1 run time.
     assert set(lo["not_run"]) == {"a2c", "qrdqn"}
-    assert "## Longer budgets (x3)" in text and "| ppo | 2 | 900 |" in text
+    assert "| ppo | 2 | 900 |" in text
     assert manifest["commands"][1] in text
     png = tmp_path / "figures" / "bench" / "bench_longer.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/bench_longer.png" in text
@@ -189,3 +194,25 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
         ["report", "--results", str(out), "--out", str(md), "--longer", str(tmp_path / "empty")]
     )
     assert rc == 2 and "no result files" in capsys.readouterr().err
+
+
+def test_run_flags_set_overrides_and_reject_bad_ones(suite):
+    from sixaxis_avoid.benchmark.__main__ import main, parse_sets
+    from sixaxis_avoid.benchmark.learners import LearnerError
+
+    assert parse_sets(["ppo.lr_schedule=linear", "ppo.n_envs=4", "dqn.net_arch=[8, 8]"]) == {
+        "ppo": {"lr_schedule": "linear", "n_envs": 4},
+        "dqn": {"net_arch": [8, 8]},
+    }
+    for bad in ("ppo=1", "ppo.lr", ".x=1"):
+        with pytest.raises(SystemExit, match=r"LEARNER\.KEY=VALUE"):
+            parse_sets([bad])
+    with pytest.raises(SystemExit, match="'a2c' is not one of --learners"):
+        main(["run", "--suite", "quick", "--learners", "ppo", "--set", "a2c.n_envs=2"])
+    # A schedule it does not know fails the run with the field and the value named.
+    (spec,) = plan_runs(
+        suite, ["ppo"], seeds=[0], tasks=[suite.task("paper_simple")],
+        overrides={"ppo": {"lr_schedule": "cosine"}},
+    )  # fmt: skip
+    with pytest.raises(LearnerError, match="lr_schedule: 'cosine'"):
+        runner.execute_run(spec)

@@ -43,6 +43,22 @@ def split(text: str) -> list[str]:
     return [x.strip() for x in text.split(",") if x.strip()]
 
 
+def parse_sets(items: list[str]) -> dict[str, dict[str, Any]]:
+    """``--set LEARNER.KEY=VALUE`` flags as per-learner overrides."""
+    out: dict[str, dict[str, Any]] = {}
+    for item in items:
+        target, eq, raw = item.partition("=")
+        learner, dot, key = target.partition(".")
+        if not (eq and dot and learner and key):
+            raise SystemExit(f"--set: {item!r}: expected LEARNER.KEY=VALUE")
+        try:
+            value = json.loads(raw)
+        except json.JSONDecodeError:
+            value = raw
+        out.setdefault(learner, {})[key] = value
+    return out
+
+
 def union(first: list[str], then: list[str]) -> list[str]:
     """``first`` followed by the items of ``then`` not in it, order kept."""
     return list(dict.fromkeys([*first, *then]))
@@ -71,6 +87,14 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     r.add_argument(
         "--budget-scale", type=float, default=1.0, help="multiply the deep learners' budgets"
     )
+    r.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="LEARNER.KEY=VALUE",
+        help="override a hyperparameter (VALUE as JSON, else a string), e.g. "
+        "ppo.lr_schedule=linear; repeatable",
+    )
     r.add_argument("--out-dir", type=Path, help="default results/bench/SUITE")
     add_ray_args(r)
 
@@ -95,7 +119,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     rep.add_argument(
         "--longer",
         type=Path,
-        help="results of the same suite at a larger --budget-scale, set beside the study",
+        action="append",
+        help="results of the same suite at a larger --budget-scale, set beside the study "
+        "(repeatable: one section each)",
     )
 
     ls = sub.add_parser("list", help="suites, learners and a suite's tasks")
@@ -118,6 +144,10 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     learners = split(args.learners)
     for name in learners:
         lmod.resolve(name)
+    sets = parse_sets(args.set)
+    for name in sets:
+        if name not in learners:
+            raise SystemExit(f"--set {name}.…: {name!r} is not one of --learners {learners}")
     specs = runner.plan_runs(
         suite,
         learners,
@@ -125,6 +155,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         tasks=tasks,
         hyperparams=args.hyperparams or suite.raw.get("hyperparams", "v1"),
         budget_scale=args.budget_scale,
+        overrides=sets,
     )
     out = args.out_dir or Path("results") / "bench" / suite.name
     print(f"{len(specs)} runs ({len(learners)} learners) -> {out}", file=sys.stderr)

@@ -449,6 +449,16 @@ def greedy_rollout(model: Any, env: gym.Env, cap: int) -> list[Cell] | None:
     return None
 
 
+def linear_schedule(initial: float) -> Callable[[float], float]:
+    """A learning rate falling linearly from ``initial`` to 0 over training (SB3 calls it
+    with the fraction of the budget remaining, 1 to 0)."""
+
+    def rate(progress_remaining: float) -> float:
+        return initial * progress_remaining
+
+    return rate
+
+
 class SB3Learner(Learner):
     """A Stable-Baselines3-style algorithm on ``SixAxisAvoid-v0`` (vector observations; goal
     observations on goal tasks, with hindsight experience replay for off-policy ones)."""
@@ -475,6 +485,14 @@ class SB3Learner(Learner):
         self._goal = ctx.task.is_goal
         vec = DummyVecEnv([lambda: ctx.make_env(**env_kw)] * n_envs)
         policy_kwargs = {k: hp.pop(k) for k in ("net_arch", "n_quantiles") if k in hp}
+        schedule = hp.pop("lr_schedule", "constant")
+        if schedule == "linear":
+            # rl-baselines3-zoo's "lin_": from the value down to 0 at the end of the budget.
+            hp["learning_rate"] = linear_schedule(float(hp.get("learning_rate", 3e-4)))
+        elif schedule != "constant":
+            raise LearnerError(
+                f"lr_schedule: {schedule!r} is not a schedule (use 'constant' or 'linear')"
+            )
         if self._goal and self.off_policy:
             from stable_baselines3 import HerReplayBuffer
 

@@ -82,8 +82,11 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
             curves[label] = stats.iqm_curves(
                 rs, [lr], tasks, seeds, grid, reps=max(reps // 4, 100)
             )[lr]
+        hp_long, hp_x1 = long_runs[0]["spec"]["hyperparams"], short_runs[0]["spec"]["hyperparams"]
         out["learners"][lr] = {
             "seeds": seeds,
+            # Hyperparameters that differ from the reported study's (beyond the budget).
+            "changed": {k: v for k, v in hp_long.items() if hp_x1.get(k) != v},
             "scale": scale,
             "budget_env_steps": sorted({b for _, b in budgets}),
             "agg": agg,
@@ -170,11 +173,17 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
     if not lo["learners"]:
         return []
     scale = lo["scale"]
+    changes = {lr: v["changed"] for lr, v in lo["learners"].items() if v["changed"]}
+    changed = "; ".join(
+        f"{lr}: " + ", ".join(f"`{k}`={json.dumps(x)}" for k, x in c.items())
+        for lr, c in changes.items()
+    )
     L = [
-        f"## Longer budgets (x{scale:g})",
+        f"## Longer budgets (x{scale:g}{', ' + changed if changed else ''})",
         "",
-        f"The same suite with every deep budget multiplied by {scale:g} (the hyperparameters "
-        "as tuned at x1, unchanged), for the learners and seeds below, set beside the same "
+        f"The same suite with every deep budget multiplied by {scale:g} (hyperparameters as "
+        f"tuned at x1{', but ' + changed if changed else ', unchanged'}), for the learners and "
+        "seeds below, set beside the same "
         "learners, tasks and seeds of the study above. Score: the final greedy path's SPL, as "
         "above; *best checkpoint* is the best score a run's greedy path had at any checkpoint "
         "(it found that path, whether or not it kept it). P(xK > x1): the probability that a "

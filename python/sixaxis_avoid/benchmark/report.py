@@ -358,7 +358,7 @@ def markdown(
     a: dict[str, Any],
     figs: dict[str, Path],
     out_path: Path,
-    longer: dict[str, Any] | None = None,
+    longer: list[dict[str, Any]] | None = None,
 ) -> str:
     m = a["manifest"]
     suite = m["suite"]
@@ -459,7 +459,11 @@ def markdown(
         *poi_rows,
         "",
         *plateau_section(a),
-        *(longer_section(longer, rel.get("longer")) if longer is not None else []),
+        *[
+            x
+            for i, lo in enumerate(longer or [])
+            for x in longer_section(lo, rel.get(f"longer{i}"))
+        ],
         "## Per learner (all tasks)",
         "",
         *table({"all": a["per"]}, "tasks"),
@@ -517,7 +521,7 @@ def write_report(
     out: Path,
     figures_dir: Path | None = None,
     reps: int = stats.REPS,
-    longer: Path | None = None,
+    longer: Path | list[Path] | None = None,
 ) -> dict[str, Any]:
     """Write the report ``out`` and its figures from the study in ``results``; with
     ``longer``, a second study of the same suite at a larger ``--budget-scale`` is set beside
@@ -526,13 +530,13 @@ def write_report(
     figures_dir = Path(figures_dir) if figures_dir else out.parent / "figures" / "bench"
     a = analyse(results, reps)
     figs = figures(a, figures_dir)
-    lo = None
-    if longer is not None:
-        lo = analyse_longer(a, Path(longer), reps)
+    dirs = [longer] if isinstance(longer, (str, Path)) else list(longer or [])
+    a["longer"] = [analyse_longer(a, Path(d), reps) for d in dirs]
+    for i, lo in enumerate(a["longer"]):
         if lo["learners"]:
-            figs["longer"] = longer_figure(lo, figures_dir / "bench_longer.png", COLORS)
-        a["longer"] = lo
-    atomic_write_text(out, markdown(a, figs, out, lo))
+            name = "bench_longer.png" if i == 0 else f"bench_longer_{i + 1}.png"
+            figs[f"longer{i}"] = longer_figure(lo, figures_dir / name, COLORS)
+    atomic_write_text(out, markdown(a, figs, out, a["longer"]))
     summary = {
         "learners": a["learners"],
         "tasks": a["tasks"],
@@ -541,13 +545,16 @@ def write_report(
         "per_learner": a["per"],
         "per_group": a["per_group"],
     }
-    if lo is not None:
-        summary["longer"] = {
-            lr: {k: v[k] for k in ("seeds", "scale", "budget_env_steps", "poi_long_over_x1",
-                                   "plateau_x1", "plateau_long", "per_task", "core_hours")}
+    summary["longer"] = [
+        {
+            lr: {k: v[k] for k in ("seeds", "scale", "changed", "budget_env_steps",
+                                   "poi_long_over_x1", "plateau_x1", "plateau_long", "per_task",
+                                   "core_hours")}
             | {"aggregates": {x: {k: y[k] for k in ("iqm", "iqm_ci", "mean", "mean_ci")}
                               for x, y in v["agg"]["learners"].items()}}
             for lr, v in lo["learners"].items()
-        }  # fmt: skip
+        }
+        for lo in a["longer"]
+    ]  # fmt: skip
     atomic_write_text(figures_dir / "bench_summary.json", json.dumps(summary, indent=1) + "\n")
     return a
