@@ -186,6 +186,8 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     assert set(lo["not_run"]) == {"a2c", "qrdqn"}
     assert "| ppo | 2 | 900 |" in text
     assert manifest["commands"][1] in text
+    assert "With every deep budget x3 (*Longer budgets* below): **ppo** IQM" in text
+    assert f"report --results {out} --longer {longer}" in text
     png = tmp_path / "figures" / "bench" / "bench_longer.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/bench_longer.png" in text
     # A directory without results is a clear error, not a traceback.

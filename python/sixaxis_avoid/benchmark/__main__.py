@@ -5,6 +5,8 @@ python -m sixaxis_avoid.benchmark run --suite quick             # CI-sized, a mi
 python -m sixaxis_avoid.benchmark run --suite v1                # the reported study
 python -m sixaxis_avoid.benchmark run --suite v1 --address auto # on a Ray cluster
 python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30   # Optuna, tuning tasks only
+python -m sixaxis_avoid.benchmark run --suite v1 --learners ppo --budget-scale 10 \
+    --set ppo.lr_schedule=linear --out-dir results/bench/v1-x10-lin  # longer, one change
 python -m sixaxis_avoid.benchmark report --results results/bench/v1
 python -m sixaxis_avoid.benchmark report --results results/bench/v1 --longer results/bench/v1-x10
 """

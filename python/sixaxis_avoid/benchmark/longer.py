@@ -52,7 +52,12 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
     named = manifest.get("learners", []) + [_key(r)[0] for r in runs]
     learners = [lr for lr in dict.fromkeys(named) if any(_key(r)[0] == lr for r in runs)]
     base = {_key(r): r for r in a["runs"]}
-    out: dict[str, Any] = {"manifest": manifest, "learners": {}, "tasks": tasks}
+    out: dict[str, Any] = {
+        "dir": str(long_dir),
+        "manifest": manifest,
+        "learners": {},
+        "tasks": tasks,
+    }
     for lr in learners:
         mine = {_key(r): r for r in runs if r["spec"]["learner"] == lr}
         seeds = [

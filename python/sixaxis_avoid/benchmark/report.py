@@ -286,6 +286,29 @@ def run_hours(runs: list[dict[str, Any]]) -> float:
     return sum(r["timing"].get("run_wall_time_s", r["timing"]["wall_time_s"]) for r in runs) / 3600
 
 
+def longer_headline(a: dict[str, Any]) -> list[str]:
+    """One line per *Longer budgets* section: each learner's IQM at x1 and there."""
+    out = []
+    for lo in a.get("longer", []):
+        if not lo["learners"]:
+            continue
+        parts = []
+        for lr, v in lo["learners"].items():
+            g = v["agg"]["learners"]
+            change = ", ".join(f"{k}={json.dumps(x)}" for k, x in v["changed"].items())
+            parts.append(
+                f"**{lr}**{' (' + change + ')' if change else ''} IQM {g['x1']['iqm']:.2f} → "
+                f"{ci(g['long']['iqm'], g['long']['iqm_ci'])} on its {len(v['seeds'])} seeds"
+            )
+        out += [
+            f"With every deep budget x{lo['scale']:g} (*Longer budgets* below): "
+            + "; ".join(parts)
+            + ".",
+            "",
+        ]
+    return out
+
+
 def run_commands(a: dict[str, Any]) -> list[str]:
     """The commands that made this study: the tuning runs recorded in the hyperparameter
     file, the study's own command, and a cluster-sized variant of it."""
@@ -301,7 +324,10 @@ def run_commands(a: dict[str, Any]) -> list[str]:
         "bash scripts/setup.sh && source .venv/bin/activate   # or: pip install -e '.[bench]'",
         *(tune_cmds or [f"python -m sixaxis_avoid.benchmark tune --suite {suite}"]),
         a["manifest"]["command"],
-        f"python -m sixaxis_avoid.benchmark report --results results/bench/{suite}",
+        *[c for lo in a.get("longer", []) for c in lo["manifest"].get("commands", [])],
+        "python -m sixaxis_avoid.benchmark report --results "
+        + a.get("results_dir", f"results/bench/{suite}")
+        + "".join(f" --longer {lo['dir']}" for lo in a.get("longer", [])),
         "# a cluster-sized run: join a Ray cluster, 20 seeds, every deep budget x10",
         f"python -m sixaxis_avoid.benchmark run --suite {suite} --address auto --seeds 20 "
         "--budget-scale 10 --out-dir results/bench/cluster",
@@ -421,6 +447,7 @@ def markdown(
             for i, lr in enumerate(ranked)
         ],
         "",
+        *longer_headline(a),
         "Learners use different numbers of env steps (the column above): the tabular learners "
         "the paper's episode count, the deep learners the suite's budget, BFS none (it reads "
         "the grid). Compare sample efficiency on the learning curves (score against env "
@@ -529,6 +556,7 @@ def write_report(
     results, out = Path(results), Path(out)
     figures_dir = Path(figures_dir) if figures_dir else out.parent / "figures" / "bench"
     a = analyse(results, reps)
+    a["results_dir"] = str(results)
     figs = figures(a, figures_dir)
     dirs = [longer] if isinstance(longer, (str, Path)) else list(longer or [])
     a["longer"] = [analyse_longer(a, Path(d), reps) for d in dirs]
