@@ -190,6 +190,22 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     assert f"report --results {out} --longer {longer}" in text
     png = tmp_path / "figures" / "bench" / "bench_longer.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/bench_longer.png" in text
+    # Several longer studies, one section each: here PPO's untuned defaults at x2.
+    plain = tmp_path / "x2-defaults"
+    flags = ["--learners", "ppo", "--seeds", "1", "--hyperparams", "defaults"]
+    assert (
+        main([*common[:3], "--budget-scale", "2", *common[5:], *flags, "--out-dir", str(plain)])
+        == 0
+    )
+    a = write_report(out, md, reps=100, longer=[longer, plain])
+    text = md.read_text()
+    second = a["longer"][1]["learners"]["ppo"]
+    assert a["longer"][1]["scale"] == 2.0 and second["status"] == "defaults"
+    assert second["changed"]["learning_rate"] == "default"  # SB3's own, not the tuned value
+    assert "## Longer budgets (x2, ppo: untuned defaults)" in text
+    assert "ppo's values here against the tuned ones" in text
+    assert (tmp_path / "figures" / "bench" / "bench_longer_2.png").exists()
+    assert f"--longer {longer} --longer {plain}" in text
     # A directory without results is a clear error, not a traceback.
     (tmp_path / "empty").mkdir()
     rc = main(

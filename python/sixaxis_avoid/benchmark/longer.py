@@ -27,6 +27,16 @@ from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig
 from sixaxis_avoid.benchmark.runner import load_runs
 
+_UNSET = object()
+
+
+def change_label(v: dict[str, Any]) -> str:
+    """What a learner's longer runs changed beyond the budget, short: its untuned defaults
+    (against tuned values at x1), or the changed hyperparameters."""
+    if v.get("status") == "defaults" and v.get("status_x1") == "tuned":
+        return "untuned defaults"
+    return ", ".join(f"`{k}`={json.dumps(x)}" for k, x in v["changed"].items())
+
 
 def _key(r: dict[str, Any]) -> tuple[str, str, int]:
     return r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]
@@ -91,7 +101,14 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
         out["learners"][lr] = {
             "seeds": seeds,
             # Hyperparameters that differ from the reported study's (beyond the budget).
-            "changed": {k: v for k, v in hp_long.items() if hp_x1.get(k) != v},
+            # (a key only the reported study set reads "default": the library's own value).
+            "changed": {
+                k: hp_long.get(k, "default")
+                for k in sorted(set(hp_long) | set(hp_x1))
+                if hp_long.get(k, _UNSET) != hp_x1.get(k, _UNSET)
+            },
+            "status": long_runs[0]["spec"].get("hyperparams_status"),
+            "status_x1": short_runs[0]["spec"].get("hyperparams_status"),
             "scale": scale,
             "budget_env_steps": sorted({b for _, b in budgets}),
             "agg": agg,
@@ -178,10 +195,8 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
     if not lo["learners"]:
         return []
     scale = lo["scale"]
-    changes = {lr: v["changed"] for lr, v in lo["learners"].items() if v["changed"]}
     changed = "; ".join(
-        f"{lr}: " + ", ".join(f"`{k}`={json.dumps(x)}" for k, x in c.items())
-        for lr, c in changes.items()
+        f"{lr}: {change_label(v)}" for lr, v in lo["learners"].items() if change_label(v)
     )
     L = [
         f"## Longer budgets (x{scale:g}{', ' + changed if changed else ''})",
@@ -209,6 +224,14 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
             f"| {v['per_x1']['success_rate']:.2f} → {v['per_long']['success_rate']:.2f} "
             f"| {g['best']['mean']:.2f} | {v['core_hours']:.2f} |"
         )
+    for lr, v in lo["learners"].items():
+        if change_label(v) == "untuned defaults":
+            L += [
+                "",
+                f"{lr}'s values here against the tuned ones (`default`: the library's own): "
+                + ", ".join(f"`{k}`={json.dumps(x)}" for k, x in v["changed"].items())
+                + ".",
+            ]
     L += [
         "",
         "Did the longer curves plateau? Mean score at a quarter, half and all of each run's "

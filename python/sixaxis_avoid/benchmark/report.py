@@ -20,7 +20,12 @@ from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.learners import BUILTIN
-from sixaxis_avoid.benchmark.longer import analyse_longer, longer_figure, longer_section
+from sixaxis_avoid.benchmark.longer import (
+    analyse_longer,
+    change_label,
+    longer_figure,
+    longer_section,
+)
 from sixaxis_avoid.benchmark.runner import load_runs, task_of
 
 COLORS = {
@@ -295,10 +300,11 @@ def longer_headline(a: dict[str, Any]) -> list[str]:
         parts = []
         for lr, v in lo["learners"].items():
             g = v["agg"]["learners"]
-            change = ", ".join(f"{k}={json.dumps(x)}" for k, x in v["changed"].items())
+            change = change_label(v).replace("`", "")
             parts.append(
                 f"**{lr}**{' (' + change + ')' if change else ''} IQM {g['x1']['iqm']:.2f} → "
-                f"{ci(g['long']['iqm'], g['long']['iqm_ci'])} on its {len(v['seeds'])} seeds"
+                f"{g['long']['iqm']:.2f} [{g['long']['iqm_ci'][0]:.2f}, "
+                f"{g['long']['iqm_ci'][1]:.2f}] on its {len(v['seeds'])} seeds"
             )
         out += [
             f"With every deep budget x{lo['scale']:g} (*Longer budgets* below): "
@@ -575,7 +581,7 @@ def write_report(
     }
     summary["longer"] = [
         {
-            lr: {k: v[k] for k in ("seeds", "scale", "changed", "budget_env_steps",
+            lr: {k: v[k] for k in ("seeds", "scale", "changed", "status", "budget_env_steps",
                                    "poi_long_over_x1", "plateau_x1", "plateau_long", "per_task",
                                    "core_hours")}
             | {"aggregates": {x: {k: y[k] for k in ("iqm", "iqm_ci", "mean", "mean_ci")}
