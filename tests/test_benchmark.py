@@ -234,3 +234,44 @@ def test_run_flags_set_overrides_and_reject_bad_ones(suite):
     )  # fmt: skip
     with pytest.raises(LearnerError, match="lr_schedule: 'cosine'"):
         runner.execute_run(spec)
+
+
+def test_longer_only_report_beside_a_partial_x1_study(local, tmp_path, capsys):
+    """`report --longer-only`: the x1 side holds just the learners compared, with more seeds of
+    one learner than of another; each is compared on all of its own seeds."""
+    from sixaxis_avoid.benchmark.__main__ import main
+
+    out, runs = local
+    x1 = tmp_path / "x1"
+    (x1 / "runs").mkdir(parents=True)
+    for key, r in runs.items():
+        if r["spec"]["learner"] == "ppo" or (
+            r["spec"]["learner"] == "dqn" and r["spec"]["seed"] == 0
+        ):
+            shutil.copy(out / "runs" / f"{key}.json", x1 / "runs" / f"{key}.json")
+    manifest = json.loads((out / "study.json").read_text())
+    runner.write_manifest(x1, {**manifest, "learners": ["ppo", "dqn"], "command": "pytest x1"})
+    longer = tmp_path / "x2"
+    flags = ["--suite", "quick", "--budget-scale", "2", "--no-ray", "--no-progress"]
+    assert main(["run", *flags, "--learners", "ppo,dqn", "--out-dir", str(longer)]) == 0
+    md = tmp_path / "docs" / "LONGER.md"
+    argv = ["report", "--longer-only", "--results", str(x1), "--longer", str(longer)]
+    assert main([*argv, "--out", str(md), "--reps", "100"]) == 0
+    text = md.read_text()
+    assert text.startswith("# Learner benchmark: longer budgets")
+    assert (
+        "## Longer budgets (x2)" in text and "| ppo | 2 | 600 |" in text and "| dqn | 1 |" in text
+    )
+    assert f"report --longer-only --results {x1} --longer {longer} --out {md}" in text
+    assert "## Per task" not in text  # the x1 study's own tables are not repeated here
+    png = tmp_path / "docs" / "figures" / "bench" / "longer_x2.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/longer_x2.png" in text
+    (section,) = json.loads((png.parent / "longer_summary.json").read_text())
+    assert section["ppo"]["seeds"] == [0, 1] and section["dqn"]["seeds"] == [0]
+    x1_scores = [
+        runs[f"{t}__ppo__s{s}"]["result"]["score"] for t in manifest["tasks"] for s in (0, 1)
+    ]
+    assert section["ppo"]["aggregates"]["x1"]["mean"] == pytest.approx(sum(x1_scores) / 6)
+    # Without a longer study there is nothing to write: a clear error, not a traceback.
+    assert main(["report", "--longer-only", "--results", str(x1), "--out", str(md)]) == 2
+    assert "--longer-only needs at least one --longer DIR" in capsys.readouterr().err

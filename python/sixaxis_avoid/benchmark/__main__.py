@@ -9,6 +9,8 @@ python -m sixaxis_avoid.benchmark run --suite v1 --learners ppo --budget-scale 1
     --set ppo.lr_schedule=linear --out-dir results/bench/v1-x10-lin  # longer, one change
 python -m sixaxis_avoid.benchmark report --results results/bench/v1
 python -m sixaxis_avoid.benchmark report --results results/bench/v1 --longer results/bench/v1-x10
+python -m sixaxis_avoid.benchmark report --longer-only --results docs/results/v1 \
+    --longer docs/results/v1-x10 --longer docs/results/v1-x4   # docs/BENCHMARKS_LONGER.md
 """
 
 from __future__ import annotations
@@ -115,7 +117,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
     rep = sub.add_parser("report", help="docs/BENCHMARKS.md and figures from result files")
     rep.add_argument("--results", type=Path, default=Path("results/bench/v1"))
-    rep.add_argument("--out", type=Path, default=Path("docs/BENCHMARKS.md"))
+    rep.add_argument(
+        "--out",
+        type=Path,
+        help="default docs/BENCHMARKS.md (docs/BENCHMARKS_LONGER.md with --longer-only)",
+    )
     rep.add_argument("--figures-dir", type=Path, help="default: OUT's folder / figures/bench")
     rep.add_argument("--reps", type=int, default=2000, help="bootstrap replications")
     rep.add_argument(
@@ -124,6 +130,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         action="append",
         help="results of the same suite at a larger --budget-scale, set beside the study "
         "(repeatable: one section each)",
+    )
+    rep.add_argument(
+        "--longer-only",
+        action="store_true",
+        help="write only the --longer sections, beside the x1 runs in --results (which may "
+        "hold just the learners compared)",
     )
 
     ls = sub.add_parser("list", help="suites, learners and a suite's tasks")
@@ -246,12 +258,23 @@ def main(argv: list[str] | None = None) -> int:
 
             return cmd_tune(args, argv)
         if args.cmd == "report":
-            from sixaxis_avoid.benchmark.report import write_report
+            from sixaxis_avoid.benchmark.report import write_longer_report, write_report
 
             try:
-                write_report(
-                    args.results, args.out, args.figures_dir, reps=args.reps, longer=args.longer
-                )
+                if args.longer_only:
+                    args.out = args.out or Path("docs/BENCHMARKS_LONGER.md")
+                    write_longer_report(
+                        args.results, args.longer or [], args.out, args.figures_dir, args.reps
+                    )
+                else:
+                    args.out = args.out or Path("docs/BENCHMARKS.md")
+                    write_report(
+                        args.results,
+                        args.out,
+                        args.figures_dir,
+                        reps=args.reps,
+                        longer=args.longer,
+                    )
             except (ValueError, FileNotFoundError) as e:  # a results directory it cannot use
                 print(f"error: {e}", file=sys.stderr)
                 return 2

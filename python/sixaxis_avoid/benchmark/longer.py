@@ -62,6 +62,9 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
     named = manifest.get("learners", []) + [_key(r)[0] for r in runs]
     learners = [lr for lr in dict.fromkeys(named) if any(_key(r)[0] == lr for r in runs)]
     base = {_key(r): r for r in a["runs"]}
+    # Every seed the reported study has for this learner on every task (not only the seeds
+    # complete for all of its learners: a study may hold more seeds of one learner).
+    base_seeds = sorted({k[2] for k in base})
     out: dict[str, Any] = {
         "dir": str(long_dir),
         "manifest": manifest,
@@ -71,7 +74,7 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
     for lr in learners:
         mine = {_key(r): r for r in runs if r["spec"]["learner"] == lr}
         seeds = [
-            s for s in a["seeds"] if all((lr, t, s) in mine and (lr, t, s) in base for t in tasks)
+            s for s in base_seeds if all((lr, t, s) in mine and (lr, t, s) in base for t in tasks)
         ]
         if not seeds:
             continue
