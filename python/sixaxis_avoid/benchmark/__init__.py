@@ -8,13 +8,28 @@ Entry points:
 - :func:`plan_runs`, :func:`run_study`, :func:`execute_run` — a study's runs, on Ray.
 - :func:`write_report` (in :mod:`sixaxis_avoid.benchmark.report`) — docs/BENCHMARKS.md.
 
+Numerics: importing this package pins PyTorch's CPU arithmetic (:data:`runner.NUMERICS_ENV`:
+MKL's conditional numerical reproducibility and ATen's AVX2 kernels, both before torch is
+imported) and every Ray worker gets the same settings, so a deep learner's run gives the same
+result on any x86-64 machine with AVX2, Intel or AMD. A variable already set in the
+environment is kept (and recorded in each run's ``host.numerics``).
+
 Needs the ``bench`` extra (``pip install sixaxis-avoid[bench]``: ray, optuna, rliable,
 stable-baselines3, sb3-contrib).
 """
 
-from sixaxis_avoid.benchmark.learners import BUILTIN, Learner, RunContext, resolve
-from sixaxis_avoid.benchmark.runner import execute_run, load_runs, plan_runs, run_study
-from sixaxis_avoid.benchmark.tasks import Suite, Task, load_suite
+from sixaxis_avoid.benchmark.runner import pin_numerics
+
+pin_numerics()  # before anything below imports torch
+
+from sixaxis_avoid.benchmark.learners import BUILTIN, Learner, RunContext, resolve  # noqa: E402
+from sixaxis_avoid.benchmark.runner import (  # noqa: E402
+    execute_run,
+    load_runs,
+    plan_runs,
+    run_study,
+)
+from sixaxis_avoid.benchmark.tasks import Suite, Task, load_suite  # noqa: E402
 
 __all__ = [
     "BUILTIN",

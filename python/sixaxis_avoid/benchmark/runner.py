@@ -31,6 +31,33 @@ from sixaxis_avoid.benchmark.tasks import Suite, Task
 
 SCHEMA = 1
 
+#: PyTorch CPU settings every run gets, so that a deep learner's floating-point results do
+#: not depend on the machine's instruction set: MKL's conditional numerical reproducibility
+#: (the same code path on every Intel or AMD x86-64 CPU) and ATen's AVX2 kernels (not AVX-512
+#: where a CPU has it). Without them a 30k-step PPO run took other decisions on an AVX-512
+#: machine than on an AVX2 one (tests/test_benchmark_numerics.py). They must be in the
+#: environment before torch is imported: :func:`pin_numerics` at package import, and Ray's
+#: ``runtime_env`` for every worker.
+NUMERICS_ENV = {"MKL_CBWR": "COMPATIBLE", "ATEN_CPU_CAPABILITY": "avx2"}
+
+
+def pin_numerics() -> dict[str, str]:
+    """Set :data:`NUMERICS_ENV` in this process's environment, keeping a value already set;
+    returns the values in force."""
+    for k, v in NUMERICS_ENV.items():
+        os.environ.setdefault(k, v)
+    return {k: os.environ[k] for k in NUMERICS_ENV}
+
+
+def numerics() -> dict[str, Any]:
+    """The arithmetic this process runs with: the pinned variables and the CPU kernels torch
+    actually dispatches to (None when torch is not loaded)."""
+    torch = sys.modules.get("torch")
+    return {
+        **{k: os.environ.get(k) for k in NUMERICS_ENV},
+        "torch_cpu_capability": None if torch is None else torch.backends.cpu.get_cpu_capability(),
+    }
+
 
 # ------------------------------------------------------------------------------------------
 # Specs
@@ -211,7 +238,12 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
         "spec": spec,
         "result": result,
         "timing": timing,
-        "host": {"hostname": socket.gethostname(), "pid": os.getpid(), "ray_node": ray_node()},
+        "host": {
+            "hostname": socket.gethostname(),
+            "pid": os.getpid(),
+            "ray_node": ray_node(),
+            "numerics": numerics(),
+        },
     }
 
 
@@ -271,7 +303,7 @@ def init_ray(address: str | None, num_cpus: int | None) -> bool:
     path = os.pathsep.join(p for p in [os.getcwd(), os.environ.get("PYTHONPATH", "")] if p)
     kw: dict[str, Any] = {
         "log_to_driver": False,
-        "runtime_env": {"env_vars": {"PYTHONPATH": path}},
+        "runtime_env": {"env_vars": {"PYTHONPATH": path, **pin_numerics()}},
     }
     if address:
         ray.init(address=address, **kw)
