@@ -264,6 +264,7 @@ def test_longer_only_report_beside_a_partial_x1_study(local, tmp_path, capsys):
     )
     assert f"report --longer-only --results {x1} --longer {longer} --out {md}" in text
     assert "## Per task" not in text  # the x1 study's own tables are not repeated here
+    assert "Not run with a longer budget here: a2c, qrdqn" in text
     png = tmp_path / "docs" / "figures" / "bench" / "longer_x2.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/longer_x2.png" in text
     (section,) = json.loads((png.parent / "longer_summary.json").read_text())

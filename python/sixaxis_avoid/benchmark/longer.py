@@ -207,7 +207,7 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
         f"The same suite with every deep budget multiplied by {scale:g} (hyperparameters as "
         f"tuned at x1{', but ' + changed if changed else ', unchanged'}), for the learners and "
         "seeds below, set beside the same "
-        "learners, tasks and seeds of the study above. Score: the final greedy path's SPL, as "
+        "learners, tasks and seeds of the x1 study. Score: the final greedy path's SPL, as "
         "above; *best checkpoint* is the best score a run's greedy path had at any checkpoint "
         "(it found that path, whether or not it kept it). P(xK > x1): the probability that a "
         "run with the longer budget scores higher than one at x1 on a random task (ties "

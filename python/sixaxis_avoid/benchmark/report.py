@@ -609,6 +609,10 @@ def longer_markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) ->
     sections = [
         x for i, lo in enumerate(a["longer"]) for x in longer_section(lo, rel.get(f"longer{i}"))
     ]
+    # The suite's deep learners that no section here compares (no x1 runs given for them).
+    tuned = hpmod.load(suite.get("hyperparams", "v1")).get("learners", {})
+    compared = {lr for lo in a["longer"] for lr in lo["learners"]}
+    absent = [lr for lr in tuned if lr not in compared]
     L = [
         "# Learner benchmark: longer budgets",
         "",
@@ -623,11 +627,17 @@ def longer_markdown(a: dict[str, Any], figs: dict[str, Path], out_path: Path) ->
         f"runs ({len(a['runs'])} runs of {learners} in `{a['results_dir']}`) were run "
         f"{m['date']} on {m['machine']}; versions: "
         + ", ".join(f"{k} {v}" for k, v in m["versions"].items())
-        + ".",
+        + ". Score of a run: SPL of its final greedy path (BFS optimum over the path's length "
+        "if it reaches the target, else 0), averaged over the task's evaluation targets.",
         "",
         "## Headline",
         "",
         *longer_headline(a),
+        *(
+            [f"Not run with a longer budget here: {', '.join(absent)} (see *How to run*).", ""]
+            if absent
+            else []
+        ),
         *sections,
         "## How to run",
         "",
