@@ -273,6 +273,15 @@ def test_longer_only_report_beside_a_partial_x1_study(local, tmp_path, capsys):
         runs[f"{t}__ppo__s{s}"]["result"]["score"] for t in manifest["tasks"] for s in (0, 1)
     ]
     assert section["ppo"]["aggregates"]["x1"]["mean"] == pytest.approx(sum(x1_scores) / 6)
+    # A second study at the same scale with one change: its own section and figure.
+    lin = tmp_path / "x2-lin"
+    sets = ["--learners", "ppo", "--set", "ppo.lr_schedule=linear"]
+    assert main(["run", *flags, *sets, "--out-dir", str(lin)]) == 0
+    assert main([*argv, "--longer", str(lin), "--out", str(md), "--reps", "100"]) == 0
+    text = md.read_text()
+    assert '## Longer budgets (x2, ppo: `lr_schedule`="linear")' in text
+    assert "figures/bench/longer_x2_ppo_lr_schedule_linear.png" in text
+    assert (png.parent / "longer_x2_ppo_lr_schedule_linear.png").exists()
     # Without a longer study there is nothing to write: a clear error, not a traceback.
     assert main(["report", "--longer-only", "--results", str(x1), "--out", str(md)]) == 2
     assert "--longer-only needs at least one --longer DIR" in capsys.readouterr().err

@@ -18,6 +18,7 @@ Entry points: :func:`analyse_longer` (numbers), :func:`longer_figure` and
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,19 @@ def change_label(v: dict[str, Any]) -> str:
     if v.get("status") == "defaults" and v.get("status_x1") == "tuned":
         return "untuned defaults"
     return ", ".join(f"`{k}`={json.dumps(x)}" for k, x in v["changed"].items())
+
+
+def section_changes(lo: dict[str, Any]) -> str:
+    """What a longer study changed beyond the budget, learner by learner ('' if nothing)."""
+    return "; ".join(
+        f"{lr}: {change_label(v)}" for lr, v in lo["learners"].items() if change_label(v)
+    )
+
+
+def figure_name(lo: dict[str, Any]) -> str:
+    """A file name for a longer study's figure: its scale and what it changed."""
+    slug = re.sub(r"[^a-z0-9]+", "_", section_changes(lo).lower()).strip("_")
+    return f"longer_x{lo['scale']:g}" + (f"_{slug}" if slug else "")
 
 
 def _key(r: dict[str, Any]) -> tuple[str, str, int]:
@@ -198,9 +212,7 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
     if not lo["learners"]:
         return []
     scale = lo["scale"]
-    changed = "; ".join(
-        f"{lr}: {change_label(v)}" for lr, v in lo["learners"].items() if change_label(v)
-    )
+    changed = section_changes(lo)
     L = [
         f"## Longer budgets (x{scale:g}{', ' + changed if changed else ''})",
         "",

@@ -23,6 +23,7 @@ from sixaxis_avoid.benchmark.learners import BUILTIN
 from sixaxis_avoid.benchmark.longer import (
     analyse_longer,
     change_label,
+    figure_name,
     longer_figure,
     longer_section,
 )
@@ -678,7 +679,7 @@ def write_longer_report(
     names: set[str] = set()
     for i, lo in enumerate(a["longer"]):
         if lo["learners"]:
-            name = f"longer_x{lo['scale']:g}"
+            name = figure_name(lo)
             name = name if name not in names else f"{name}_{i + 1}"
             names.add(name)
             figs[f"longer{i}"] = longer_figure(lo, figures_dir / f"{name}.png", COLORS)
