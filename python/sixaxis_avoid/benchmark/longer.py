@@ -76,8 +76,8 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
     named = manifest.get("learners", []) + [_key(r)[0] for r in runs]
     learners = [lr for lr in dict.fromkeys(named) if any(_key(r)[0] == lr for r in runs)]
     base = {_key(r): r for r in a["runs"]}
-    # Every seed the reported study has for this learner on every task (not only the seeds
-    # complete for all of its learners: a study may hold more seeds of one learner).
+    # Every seed among the reported study's runs; below, each learner keeps those it has on
+    # every task (not only the seeds complete for all learners: one may have more seeds).
     base_seeds = sorted({k[2] for k in base})
     out: dict[str, Any] = {
         "dir": str(long_dir),
