@@ -52,6 +52,11 @@ def figure_name(lo: dict[str, Any]) -> str:
     return f"longer_x{lo['scale']:g}" + (f"_{slug}" if slug else "")
 
 
+def n_seeds(n: int) -> str:
+    """'1 seed', '3 seeds'."""
+    return f"{n} seed" if n == 1 else f"{n} seeds"
+
+
 def _key(r: dict[str, Any]) -> tuple[str, str, int]:
     return r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]
 
@@ -190,7 +195,7 @@ def longer_figure(lo: dict[str, Any], path: Path, colors: dict[str, str]) -> Pat
                             color=color, alpha=0.12, linewidth=0)  # fmt: skip
         ax.set_xscale("log")
         ax.set_ylim(-0.02, 1.02)
-        ax.set_title(f"{lr}: {len(v['seeds'])} seeds x {len(lo['tasks'])} tasks")
+        ax.set_title(f"{lr}: {n_seeds(len(v['seeds']))} x {len(lo['tasks'])} tasks")
         ax.set_xlabel("environment steps")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="upper left")

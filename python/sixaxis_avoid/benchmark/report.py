@@ -26,6 +26,7 @@ from sixaxis_avoid.benchmark.longer import (
     figure_name,
     longer_figure,
     longer_section,
+    n_seeds,
 )
 from sixaxis_avoid.benchmark.runner import load_runs, task_of
 
@@ -305,7 +306,7 @@ def longer_headline(a: dict[str, Any]) -> list[str]:
             parts.append(
                 f"**{lr}**{' (' + change + ')' if change else ''} IQM {g['x1']['iqm']:.2f} → "
                 f"{g['long']['iqm']:.2f} [{g['long']['iqm_ci'][0]:.2f}, "
-                f"{g['long']['iqm_ci'][1]:.2f}] on its {len(v['seeds'])} seeds"
+                f"{g['long']['iqm_ci'][1]:.2f}] on its {n_seeds(len(v['seeds']))}"
             )
         out += [
             f"With every deep budget x{lo['scale']:g} (*Longer budgets* below): "
