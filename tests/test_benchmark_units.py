@@ -285,3 +285,7 @@ def test_cli_list_and_errors(capsys):
     with pytest.raises(SystemExit):
         cli.main(["run", "--budget-scale", "0"])
     assert cli.parse_seeds("3") == [0, 1, 2] and cli.parse_seeds("4,7") == [4, 7]
+    assert cli.parse_seeds("0,") == [0] and cli.parse_seeds(" 5, ") == [5]
+    for bad, says in (("0", "seed 0 alone is --seeds 0,"), ("two", "'two'"), ("1,-2", "'1,-2'")):
+        with pytest.raises(SystemExit, match=says):
+            cli.parse_seeds(bad)

@@ -34,12 +34,20 @@ def command_line(argv: list[str]) -> str:
 
 
 def parse_seeds(text: str | None) -> list[int] | None:
+    """``--seeds``: a count N (seeds 0..N-1) or a comma list; one seed k is ``k,``."""
     if text is None:
         return None
     text = text.strip()
-    seeds = list(range(int(text))) if "," not in text else [int(s) for s in text.split(",")]
+    parts = split(text)
+    try:
+        seeds = [int(s) for s in parts]
+    except ValueError:
+        raise SystemExit(f"--seeds: {text!r}: not a count or a comma list of integers") from None
+    if "," not in text and seeds:
+        seeds = list(range(seeds[0]))
     if not seeds or any(s < 0 for s in seeds):
-        raise SystemExit(f"--seeds: {text!r}: need at least one seed, all >= 0")
+        hint = " (a count; seed 0 alone is --seeds 0,)" if text == "0" else ""
+        raise SystemExit(f"--seeds: {text!r}: need at least one seed, all >= 0{hint}")
     return seeds
 
 
@@ -86,7 +94,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     r.add_argument("--suite", default="v1", help=f"name ({', '.join(available())}) or path")
     r.add_argument("--learners", default=DEFAULT_LEARNERS, help="comma list; module:Class too")
     r.add_argument("--tasks", help="comma list of task ids (default: the suite's)")
-    r.add_argument("--seeds", help="a count N (0..N-1) or a comma list (default: the suite's)")
+    r.add_argument(
+        "--seeds",
+        help="a count N (0..N-1) or a comma list; one seed k: 'k,' (default: the suite's)",
+    )
     r.add_argument("--hyperparams", help="hyperparameter file (default: the suite's)")
     r.add_argument(
         "--budget-scale", type=float, default=1.0, help="multiply the deep learners' budgets"
