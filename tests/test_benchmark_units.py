@@ -13,6 +13,7 @@ from sixaxis_avoid.benchmark import execute_run, load_suite, plan_runs, resolve,
 from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark.algorithm2 import algorithm2
 from sixaxis_avoid.benchmark.learners import LearnerError, spl
+from sixaxis_avoid.benchmark.longer import fmt_ci
 from sixaxis_avoid.benchmark.tasks import SuiteError
 
 
@@ -179,6 +180,15 @@ def test_aggregates_on_known_scores():
     assert g["profile"][0] == 1.0 and a["learners"]["bad"]["profile"][-1] == 0.0
     # Seeded: the same intervals again.
     assert stats.aggregates({"good": good, "bad": bad}, reps=200) == a
+    assert g["seeds"] == 10 and "[" in fmt_ci(g, "iqm")
+
+
+def test_one_seed_per_task_is_reported_without_an_interval():
+    # A stratified bootstrap over one run per task resamples nothing: its "CI" is the point.
+    one = stats.aggregates({"x1": np.array([[0.0, 1.0, 0.5]]), "long": np.ones((1, 3))}, reps=50)
+    g = one["learners"]["x1"]
+    assert g["seeds"] == 1 and g["iqm_ci"][0] == g["iqm_ci"][1]
+    assert fmt_ci(g, "mean") == "0.50 (1 seed: no CI)"
 
 
 def test_curve_on_is_a_step_function():

@@ -24,6 +24,7 @@ from sixaxis_avoid.benchmark.longer import (
     analyse_longer,
     change_label,
     figure_name,
+    fmt_ci,
     longer_figure,
     longer_section,
     n_seeds,
@@ -305,8 +306,7 @@ def longer_headline(a: dict[str, Any]) -> list[str]:
             change = change_label(v).replace("`", "")
             parts.append(
                 f"**{lr}**{' (' + change + ')' if change else ''} IQM {g['x1']['iqm']:.2f} → "
-                f"{g['long']['iqm']:.2f} [{g['long']['iqm_ci'][0]:.2f}, "
-                f"{g['long']['iqm_ci'][1]:.2f}] on its {n_seeds(len(v['seeds']))}"
+                f"{fmt_ci(g['long'], 'iqm')} on its {n_seeds(len(v['seeds']))}"
             )
         out += [
             f"With every deep budget x{lo['scale']:g} (*Longer budgets* below): "

@@ -98,6 +98,9 @@ def aggregates(
     out: dict[str, Any] = {"learners": {}, "taus": TAUS.tolist(), "poi": {}}
     for k in scores:
         out["learners"][k] = {
+            # Runs per task: with one, a stratified bootstrap has nothing to resample and
+            # its "interval" is the point itself (formatters say so instead of printing it).
+            "seeds": int(np.shape(scores[k])[0]),
             "iqm": float(point[k][0]),
             "iqm_ci": [float(ci[k][0][0]), float(ci[k][1][0])],
             "mean": float(point[k][1]),
