@@ -206,21 +206,9 @@ def longer_figure(lo: dict[str, Any], path: Path, colors: dict[str, str]) -> Pat
     return path
 
 
-NO_CI = "(1 seed: no CI)"
-
-
 def fmt_ci(s: dict[str, Any], key: str) -> str:
-    """``0.60 [0.42, 0.89]``; a bootstrap over one seed per task has no interval."""
-    if s.get("seeds", 2) < 2:
-        return f"{s[key]:.2f} {NO_CI}"
-    lo, hi = s[f"{key}_ci"]
-    return f"{s[key]:.2f} [{lo:.2f}, {hi:.2f}]"
-
-
-def _poi(p: dict[str, Any], seeds: int) -> str:
-    if seeds < 2:
-        return f"{p['p']:.2f} {NO_CI}"
-    return f"{p['p']:.2f} [{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]"
+    """An aggregate with its 95% CI (none with one seed per task)."""
+    return stats.interval_text(s[key], s[f"{key}_ci"], s.get("seeds", 2))
 
 
 def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
@@ -249,10 +237,11 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
     for lr, v in lo["learners"].items():
         g = v["agg"]["learners"]
         p = v["poi_long_over_x1"]
+        poi = stats.interval_text(p["p"], p["ci"], len(v["seeds"]))
         L.append(
             f"| {lr} | {len(v['seeds'])} | {' / '.join(f'{b:,}' for b in v['budget_env_steps'])} "
             f"| {fmt_ci(g['x1'], 'iqm')} | {fmt_ci(g['long'], 'iqm')} | {fmt_ci(g['x1'], 'mean')} "
-            f"| {fmt_ci(g['long'], 'mean')} | {_poi(p, len(v['seeds']))} "
+            f"| {fmt_ci(g['long'], 'mean')} | {poi} "
             f"| {v['per_x1']['success_rate']:.2f} → {v['per_long']['success_rate']:.2f} "
             f"| {g['best']['mean']:.2f} | {v['core_hours']:.2f} |"
         )

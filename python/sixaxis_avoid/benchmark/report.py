@@ -70,10 +70,6 @@ def fmt_time(v: Any) -> str:
     return f"{v:.1f} s"
 
 
-def ci(point: float, lo_hi: list[float]) -> str:
-    return f"{point:.3f} [{lo_hi[0]:.3f}, {lo_hi[1]:.3f}]"
-
-
 def title(learner: str) -> str:
     cls = BUILTIN.get(learner)
     return cls.title if cls else f"user learner `{learner}`"
@@ -402,7 +398,7 @@ def markdown(
 
     def metric(lr: str, key: str) -> str:
         s = agg["learners"][lr]
-        return ci(s[key], s[f"{key}_ci"])
+        return stats.interval_text(s[key], s[f"{key}_ci"], s.get("seeds", 2), digits=3)
 
     ranked = sorted(
         learners, key=lambda lr: (-agg["learners"][lr]["iqm"], -agg["learners"][lr]["mean"])
@@ -421,7 +417,9 @@ def markdown(
         cells = []
         for y in poi_learners:
             p = poi.get(f"{x},{y}")
-            cells.append("—" if p is None else f"{p['p']:.2f} [{p['ci'][0]:.2f}, {p['ci'][1]:.2f}]")
+            cells.append(
+                "—" if p is None else stats.interval_text(p["p"], p["ci"], len(a["seeds"]))
+            )
         poi_rows.append(f"| **{x}** | " + " | ".join(cells) + " |")
     L = [
         "# Learner benchmark",

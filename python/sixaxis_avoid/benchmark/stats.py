@@ -22,6 +22,18 @@ REPS = 2000
 TAUS = np.linspace(0.0, 1.0, 41)
 
 
+#: What an interval reads as when there is one run per task: a stratified bootstrap then has
+#: nothing to resample, and its "interval" is the point itself.
+NO_CI = "(1 seed: no CI)"
+
+
+def interval_text(point: float, lo_hi: list[float], seeds: int = 2, digits: int = 2) -> str:
+    """``0.60 [0.42, 0.89]``, or ``0.60 (1 seed: no CI)`` with one run per task."""
+    if seeds < 2:
+        return f"{point:.{digits}f} {NO_CI}"
+    return f"{point:.{digits}f} [{lo_hi[0]:.{digits}f}, {lo_hi[1]:.{digits}f}]"
+
+
 def rliable_library() -> Any:
     """``rliable.library`` (its stratified bootstraps need arch < 8, which needs pandas < 3:
     the ``bench`` extra pins both). rliable draws its resampling indices from NumPy's global
@@ -98,8 +110,7 @@ def aggregates(
     out: dict[str, Any] = {"learners": {}, "taus": TAUS.tolist(), "poi": {}}
     for k in scores:
         out["learners"][k] = {
-            # Runs per task: with one, a stratified bootstrap has nothing to resample and
-            # its "interval" is the point itself (formatters say so instead of printing it).
+            # Runs per task (with one, `interval_text` prints no interval).
             "seeds": int(np.shape(scores[k])[0]),
             "iqm": float(point[k][0]),
             "iqm_ci": [float(ci[k][0][0]), float(ci[k][1][0])],
