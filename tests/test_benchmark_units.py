@@ -189,6 +189,14 @@ def test_one_seed_per_task_is_reported_without_an_interval():
     g = one["learners"]["x1"]
     assert g["seeds"] == 1 and g["iqm_ci"][0] == g["iqm_ci"][1]
     assert fmt_ci(g, "mean") == "0.50 (1 seed: no CI)"
+    # The IQM figure draws no bar for it and says so in its title.
+    from sixaxis_avoid.benchmark.report import iqm_figure_title
+
+    assert iqm_figure_title({"learners": ["x1", "long"], "agg": one}).endswith(
+        "; x1, long: 1 seed, point only"
+    )
+    ten = stats.aggregates({"x1": np.ones((2, 3))}, reps=50)
+    assert "point only" not in iqm_figure_title({"learners": ["x1"], "agg": ten})
 
 
 def test_curve_on_is_a_step_function():

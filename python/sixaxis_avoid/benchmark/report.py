@@ -140,6 +140,14 @@ def analyse(results: Path, reps: int = stats.REPS) -> dict[str, Any]:
 # Figures
 
 
+def iqm_figure_title(a: dict[str, Any]) -> str:
+    """The IQM bars' title; names the learners with one seed, drawn as a point without a bar."""
+    one_seed = [lr for lr in a["learners"] if a["agg"]["learners"][lr].get("seeds", 2) < 2]
+    return "Final score (SPL) with 95% stratified-bootstrap CIs" + (
+        f"; {', '.join(one_seed)}: 1 seed, point only" if one_seed else ""
+    )
+
+
 def figures(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
     import matplotlib
 
@@ -202,14 +210,15 @@ def figures(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
         for y, lr in zip(ys, learners):
             s = a["agg"]["learners"][lr]
             lo, hi = s[f"{key}_ci"]
-            ax.barh(y, hi - lo, left=lo, height=0.6, color=COLORS.get(lr, "gray"), alpha=0.6)
+            if s.get("seeds", 2) >= 2:  # one seed: nothing to resample, a point only
+                ax.barh(y, hi - lo, left=lo, height=0.6, color=COLORS.get(lr, "gray"), alpha=0.6)
             ax.plot([s[key]] * 2, [y - 0.3, y + 0.3], color="black", linewidth=1.5)
         ax.set_xlabel(label)
         ax.set_xlim(-0.02, 1.02)
         ax.grid(True, axis="x", alpha=0.3)
     axes[0].set_yticks(ys)
     axes[0].set_yticklabels(learners)
-    fig.suptitle("Final score (SPL) with 95% stratified-bootstrap CIs")
+    fig.suptitle(iqm_figure_title(a))
     fig.tight_layout()
     out["iqm"] = out_dir / "bench_iqm.png"
     atomic_savefig(fig, out["iqm"])
