@@ -87,6 +87,27 @@ def test_spl():
     assert spl([(0, 0, 0)] * 11, 5) == 0.5
 
 
+def test_runs_go_to_the_cores_seed_by_seed(tmp_path):
+    from sixaxis_avoid.benchmark import runner
+
+    suite = load_suite("quick")
+    specs = plan_runs(suite, ["bfs", "q_assist"], seeds=[2, 0])
+    assert [s["seed"] for s in specs[:2]] == [2, 0]  # planned learner, task, seed
+    order = runner.seed_major(specs)
+    n = len(specs) // 2
+    assert {s["seed"] for s in order[:n]} == {2} and {s["seed"] for s in order[n:]} == {0}
+    assert order[:n] == [s for s in specs if s["seed"] == 2]  # otherwise in planned order
+    # run_study hands them over in that order (here in-process, one after another), and
+    # skips the finished ones.
+    got: list[int] = []
+    bfs = [s for s in specs if s["learner"] == "bfs"]
+    runner.run_study(bfs[:1], tmp_path, use_ray=False, progress=False)
+    runner.run_study(
+        bfs, tmp_path, use_ray=False, progress=False, on_result=lambda r: got.append(r["spec"])
+    )
+    assert got == [s for s in runner.seed_major(bfs) if s is not bfs[0]]
+
+
 def test_resolve_builtin_and_user_learners():
     assert resolve("ppo").family == "deep" and resolve("q_assist").family == "native"
     assert resolve("bench_user_learner:ScriptedBFS").__name__ == "ScriptedBFS"

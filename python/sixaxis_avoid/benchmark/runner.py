@@ -325,6 +325,16 @@ def _progress(total: int, initial: int, enabled: bool) -> Any:
     )
 
 
+def seed_major(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The specs seed by seed (seeds in order of first appearance), otherwise in their order:
+    the order runs are handed to Ray, so a study stopped early holds whole seeds, and the
+    next seed's runs fill the cores while the last runs of a seed finish."""
+    rank: dict[int, int] = {}
+    for s in specs:
+        rank.setdefault(s["seed"], len(rank))
+    return sorted(specs, key=lambda s: rank[s["seed"]])
+
+
 def run_study(
     specs: list[dict[str, Any]],
     out_dir: Path,
@@ -335,9 +345,10 @@ def run_study(
     progress: bool = True,
     on_result: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
-    """Run the specs whose result file is missing; returns counts and failures."""
+    """Run the specs whose result file is missing, seed by seed (:func:`seed_major`);
+    returns counts and failures."""
     out_dir = Path(out_dir)
-    todo = [s for s in specs if not finished(out_dir, s)]
+    todo = [s for s in seed_major(specs) if not finished(out_dir, s)]
     skipped = len(specs) - len(todo)
     bar = _progress(len(specs), skipped, progress)
     failures: list[tuple[str, str]] = []
