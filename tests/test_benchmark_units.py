@@ -220,6 +220,21 @@ def test_one_seed_per_task_is_reported_without_an_interval():
     assert "point only" not in iqm_figure_title({"learners": ["x1"], "agg": ten})
 
 
+def test_report_header_names_every_command_that_filled_the_study():
+    from sixaxis_avoid.benchmark.report import provenance, report_command, study_commands
+
+    one = {"command": "run A", "date": "D", "machine": "M"}
+    assert study_commands(one) == ["run A"] and provenance(one) == "Run D on M"
+    many = {**one, "command": "run C", "commands": ["run A", "run B", "run C"]}
+    assert study_commands(many) == ["run A", "run B", "run C"]
+    assert provenance(many).startswith("Filled by 3 `run` commands")
+    assert provenance(many).endswith("the last ended D on M")
+    a = {"manifest": {"suite": {"name": "v1"}}, "results_dir": "docs/results/v1"}
+    assert report_command(a).endswith("report --results docs/results/v1")
+    a["longer"] = [{"dir": "x4"}, {"dir": "x10"}]
+    assert report_command(a).endswith("--results docs/results/v1 --longer x4 --longer x10")
+
+
 def test_curve_on_is_a_step_function():
     curve = [{"env_steps": 10, "score": 0.5}, {"env_steps": 100, "score": 1.0}]
     got = stats.curve_on(np.array([1, 10, 50, 100, 1000]), curve)
