@@ -188,8 +188,9 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     assert manifest["commands"][1] in text
     assert "With every deep budget x3 (*Longer budgets* below): **ppo** IQM" in text
     assert f"report --results {out} --longer {longer}" in text
-    png = tmp_path / "figures" / "bench" / "bench_longer.png"
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and "figures/bench/bench_longer.png" in text
+    name = "longer_x3_dqn_lr_schedule_linear.png"  # named by its scale and change
+    png = tmp_path / "figures" / "bench" / name
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"figures/bench/{name}" in text
     # Several longer studies, one section each: here PPO's untuned defaults at x2.
     plain = tmp_path / "x2-defaults"
     flags = ["--learners", "ppo", "--seeds", "1", "--hyperparams", "defaults"]
@@ -204,7 +205,7 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     assert second["changed"]["learning_rate"] == "default"  # SB3's own, not the tuned value
     assert "## Longer budgets (x2, ppo: untuned defaults)" in text
     assert "ppo's values here against the tuned ones" in text
-    assert (tmp_path / "figures" / "bench" / "bench_longer_2.png").exists()
+    assert (tmp_path / "figures" / "bench" / "longer_x2_ppo_untuned_defaults.png").exists()
     assert f"--longer {longer} --longer {plain}" in text
     # A directory without results is a clear error, not a traceback.
     (tmp_path / "empty").mkdir()

@@ -582,6 +582,20 @@ def markdown(
     return "\n".join(L)
 
 
+def longer_figures(longer: list[dict[str, Any]], figures_dir: Path) -> dict[str, Path]:
+    """One figure per *Longer budgets* section that ran a learner, named by its scale and
+    what it changed (``longer_x10_ppo_lr_schedule_linear.png``), keyed ``longer{i}``."""
+    figs: dict[str, Path] = {}
+    names: set[str] = set()
+    for i, lo in enumerate(longer):
+        if lo["learners"]:
+            name = figure_name(lo)
+            name = name if name not in names else f"{name}_{i + 1}"
+            names.add(name)
+            figs[f"longer{i}"] = longer_figure(lo, figures_dir / f"{name}.png", COLORS)
+    return figs
+
+
 def write_report(
     results: Path,
     out: Path,
@@ -599,10 +613,7 @@ def write_report(
     figs = figures(a, figures_dir)
     dirs = [longer] if isinstance(longer, (str, Path)) else list(longer or [])
     a["longer"] = [analyse_longer(a, Path(d), reps) for d in dirs]
-    for i, lo in enumerate(a["longer"]):
-        if lo["learners"]:
-            name = "bench_longer.png" if i == 0 else f"bench_longer_{i + 1}.png"
-            figs[f"longer{i}"] = longer_figure(lo, figures_dir / name, COLORS)
+    figs.update(longer_figures(a["longer"], figures_dir))
     atomic_write_text(out, markdown(a, figs, out, a["longer"]))
     summary = {
         "learners": a["learners"],
@@ -707,14 +718,7 @@ def write_longer_report(
     a = analyse(results, reps)
     a["results_dir"] = str(results)
     a["longer"] = [analyse_longer(a, Path(d), reps) for d in longer]
-    figs: dict[str, Path] = {}
-    names: set[str] = set()
-    for i, lo in enumerate(a["longer"]):
-        if lo["learners"]:
-            name = figure_name(lo)
-            name = name if name not in names else f"{name}_{i + 1}"
-            names.add(name)
-            figs[f"longer{i}"] = longer_figure(lo, figures_dir / f"{name}.png", COLORS)
+    figs = longer_figures(a["longer"], figures_dir)
     atomic_write_text(out, longer_markdown(a, figs, out))
     summary = longer_summary(a["longer"])
     atomic_write_text(figures_dir / "longer_summary.json", json.dumps(summary, indent=1) + "\n")
