@@ -8,9 +8,9 @@ python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30   # Optuna, tuning
 python -m sixaxis_avoid.benchmark run --suite v1 --learners ppo --budget-scale 10 \
     --set ppo.lr_schedule=linear --out-dir results/bench/v1-x10-lin  # longer, one change
 python -m sixaxis_avoid.benchmark report --results results/bench/v1
-python -m sixaxis_avoid.benchmark report --results results/bench/v1 --longer results/bench/v1-x10
-python -m sixaxis_avoid.benchmark report --longer-only --results docs/results/v1 \
-    --longer docs/results/v1-x10 --longer docs/results/v1-x4   # docs/BENCHMARKS_LONGER.md
+python -m sixaxis_avoid.benchmark report --results docs/results/v1 --longer docs/results/v1-x10 \
+    --longer docs/results/v1-x4 --longer docs/results/v1-x10-lin   # docs/BENCHMARKS.md
+python -m sixaxis_avoid.benchmark report --longer-only --results X1 --longer DIR   # sections alone
 """
 
 from __future__ import annotations
