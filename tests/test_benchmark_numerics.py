@@ -29,12 +29,18 @@ print(json.dumps({"result": hashlib.sha256(json.dumps(rec["result"], sort_keys=T
 """
 
 
+def isa_env(isa: str, extra: dict[str, str]) -> dict[str, str]:
+    """This environment without the pinned variables, MKL held to ``isa``, plus ``extra``."""
+    env = {k: v for k, v in os.environ.items() if k not in ("MKL_CBWR", "ATEN_CPU_CAPABILITY")}
+    env.update(MKL_ENABLE_INSTRUCTIONS=isa, **extra)
+    return env
+
+
 def run_pair(extra: dict[str, str]) -> list[dict]:
     """The run with MKL's AVX2 and with its AVX-512 code paths, both at once."""
     procs = []
     for isa in ("AVX2", "AVX512"):
-        env = {k: v for k, v in os.environ.items() if k not in ("MKL_CBWR", "ATEN_CPU_CAPABILITY")}
-        env.update(MKL_ENABLE_INSTRUCTIONS=isa, **extra)
+        env = isa_env(isa, extra)
         procs.append(
             subprocess.Popen(
                 [sys.executable, "-c", SCRIPT], env=env, stdout=subprocess.PIPE, text=True
@@ -69,8 +75,7 @@ def mkl_paths_differ() -> bool:
         return False
     digests = set()
     for isa in ("AVX2", "AVX512"):
-        env = {k: v for k, v in os.environ.items() if k not in ("MKL_CBWR", "ATEN_CPU_CAPABILITY")}
-        env.update(MKL_ENABLE_INSTRUCTIONS=isa, MKL_CBWR="AUTO", ATEN_CPU_CAPABILITY="avx512")
+        env = isa_env(isa, {"MKL_CBWR": "AUTO", "ATEN_CPU_CAPABILITY": "avx512"})
         out = subprocess.run(
             [sys.executable, "-c", PROBE], env=env, capture_output=True, text=True, check=True
         )
