@@ -274,12 +274,28 @@ def test_plateau_reads_each_run_at_a_quarter_half_and_end():
 def test_dqn_search_space_keeps_the_replay_ratio_at_most_one_half():
     import optuna
 
-    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
-    for learner in ("dqn", "qrdqn"):
+    for learner in ("dqn", "qrdqn"):  # one study per learner, as `tune` makes them
+        study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=0))
         for _ in range(40):
             hp = hpmod.suggest(study.ask(), learner)
             assert hp["gradient_steps"] / hp["train_freq"] <= 0.5
             assert hp["gradient_steps"] >= 1 and hp["train_freq"] >= 2
+
+
+def test_qrdqn_search_space_is_bounded_in_compute():
+    import optuna
+
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
+    drawn = set()
+    for _ in range(60):
+        hp = hpmod.suggest(study.ask(), "qrdqn")
+        assert max(hp["net_arch"]) <= 128 and hp["batch_size"] <= 128
+        assert hp["n_quantiles"] in (10, 25)
+        drawn.add((tuple(hp["net_arch"]), hp["batch_size"], hp["n_quantiles"]))
+    assert len(drawn) >= 8  # the bound narrows the space; it does not pin it
+    dqn = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
+    nets = {tuple(hpmod.suggest(dqn.ask(), "dqn")["net_arch"]) for _ in range(60)}
+    assert (256, 256) in nets  # DQN's space keeps its widest net
 
 
 # -- hyperparameters and tuning -----------------------------------------------------------------
