@@ -235,6 +235,28 @@ def test_report_header_names_every_command_that_filled_the_study():
     assert report_command(a).endswith("--results docs/results/v1 --longer x4 --longer x10")
 
 
+def test_report_says_which_machines_the_runs_ran_on():
+    from sixaxis_avoid.benchmark.report import run_machines
+
+    def run(machine):
+        return {"host": {} if machine is None else {"machine": machine}}
+
+    assert run_machines([run(None), run(None)]) == ""  # files from before the field
+    assert run_machines([run("AMD EPYC"), run("AMD EPYC")]) == "Every run ran on AMD EPYC."
+    mixed = run_machines([run("AMD EPYC"), run("Intel Xeon"), run("AMD EPYC"), run(None)])
+    assert mixed.startswith("Runs per machine: AMD EPYC: 2; Intel Xeon: 1; not recorded")
+    assert "compare its runs from one machine" in mixed
+
+
+def test_a_run_records_its_machine_and_versions():
+    from sixaxis_avoid.benchmark.runner import execute_run, machine
+
+    suite = load_suite("quick")
+    rec = execute_run(plan_runs(suite, ["bfs"], seeds=[0])[0])
+    assert rec["host"]["machine"] == machine() and "cores" in machine()
+    assert rec["host"]["versions"]["sixaxis_avoid"] and "numpy" in rec["host"]["versions"]
+
+
 def test_curve_on_is_a_step_function():
     curve = [{"env_steps": 10, "score": 0.5}, {"env_steps": 100, "score": 1.0}]
     got = stats.curve_on(np.array([1, 10, 50, 100, 1000]), curve)

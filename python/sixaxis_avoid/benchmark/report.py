@@ -340,6 +340,31 @@ def provenance(manifest: dict[str, Any]) -> str:
     )
 
 
+def run_machines(runs: list[dict[str, Any]]) -> str:
+    """Which machines a study's runs ran on (each run file's ``host.machine``): a deep run's
+    floating-point result can depend on the CPU's vendor, so a study whose deep runs came
+    from several machines says so."""
+    kinds: dict[str, int] = {}
+    unknown = 0
+    for r in runs:
+        m = r.get("host", {}).get("machine")
+        if m is None:
+            unknown += 1
+        else:
+            kinds[m] = kinds.get(m, 0) + 1
+    if not kinds:
+        return ""
+    if len(kinds) == 1 and not unknown:
+        return f"Every run ran on {next(iter(kinds))}."
+    listed = "; ".join(f"{k}: {n}" for k, n in kinds.items())
+    if unknown:
+        listed += f"; not recorded (older result files): {unknown}"
+    return (
+        f"Runs per machine: {listed}. A deep learner's result for a seed can differ between "
+        "CPU vendors (python/README.md), so compare its runs from one machine."
+    )
+
+
 def report_command(a: dict[str, Any]) -> str:
     """The ``report`` command that writes this page from its result directories."""
     suite = a["manifest"]["suite"]["name"]
@@ -472,7 +497,8 @@ def markdown(
         f"{run_hours(a['runs']):.1f} core-hours (each run's own wall time, summed); load "
         f"average at the end {m['load_average']}. Versions: "
         + ", ".join(f"{k} {v}" for k, v in m["versions"].items())
-        + ".",
+        + ". "
+        + run_machines(a["runs"]),
         "",
         "## Headline",
         "",

@@ -242,6 +242,10 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
             "hostname": socket.gethostname(),
             "pid": os.getpid(),
             "ray_node": ray_node(),
+            # The CPU and versions the run had: a deep run's floating-point result can
+            # depend on the CPU's vendor (docs: python/README.md, "Same result").
+            "machine": machine(),
+            "versions": versions(),
             "numerics": numerics(),
         },
     }
