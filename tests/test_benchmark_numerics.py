@@ -8,7 +8,9 @@ same run takes other decisions, so the equality is not an accident of a run too 
 diverge. That control needs a machine where MKL's two paths really differ: a CPU with AVX-512
 whose vendor MKL takes those paths for (an Intel Xeon does; on an AMD EPYC with AVX-512 both
 settings give the same bits, checked on a matrix product first, and the control has nothing to
-tell apart)."""
+tell apart). What it cannot stand in for is a CPU of the other vendor: DQN and A2C runs made
+on an Intel Xeon differed when re-run on an AMD EPYC under the same pin (python/README.md), and
+runs record their machine for that reason."""
 
 from __future__ import annotations
 

@@ -11,8 +11,11 @@ Entry points:
 Numerics: importing this package pins PyTorch's CPU arithmetic (:data:`runner.NUMERICS_ENV`:
 MKL's conditional numerical reproducibility and ATen's AVX2 kernels, both before torch is
 imported) and every Ray worker gets the same settings, so a deep learner's run gives the same
-result on any x86-64 machine with AVX2, Intel or AMD. A variable already set in the
-environment is kept (and recorded in each run's ``host.numerics``).
+result on machines of one CPU vendor whatever their instruction set (AVX2 or AVX-512). Across
+vendors it can differ: runs first made on an Intel Xeon differed when re-run on an AMD EPYC
+(python/README.md), so each run records its machine (``host.machine``) and the report says
+when a study's runs came from several. A variable already set in the environment is kept
+(and recorded in each run's ``host.numerics``).
 
 Needs the ``bench`` extra (``pip install sixaxis-avoid[bench]``: ray, optuna, rliable,
 stable-baselines3, sb3-contrib).

@@ -33,9 +33,10 @@ SCHEMA = 1
 
 #: PyTorch CPU settings every run gets, so that a deep learner's floating-point results do
 #: not depend on the machine's instruction set: MKL's conditional numerical reproducibility
-#: (the same code path on every Intel or AMD x86-64 CPU) and ATen's AVX2 kernels (not AVX-512
-#: where a CPU has it). Without them a 30k-step PPO run took other decisions on an AVX-512
-#: machine than on an AVX2 one (tests/test_benchmark_numerics.py). They must be in the
+#: (MKL_CBWR=COMPATIBLE) and ATen's AVX2 kernels (not AVX-512 where a CPU has it). Without
+#: them a 30k-step PPO run took other decisions on an AVX-512 machine than on an AVX2 one
+#: (tests/test_benchmark_numerics.py). They do not make an Intel and an AMD CPU agree: DQN
+#: and A2C runs made on an Intel Xeon differed when re-run on an AMD EPYC. They must be in the
 #: environment before torch is imported: :func:`pin_numerics` at package import, and Ray's
 #: ``runtime_env`` for every worker.
 NUMERICS_ENV = {"MKL_CBWR": "COMPATIBLE", "ATEN_CPU_CAPABILITY": "avx2"}
