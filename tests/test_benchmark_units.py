@@ -229,6 +229,11 @@ def test_report_header_names_every_command_that_filled_the_study():
     assert study_commands(many) == ["run A", "run B", "run C"]
     assert provenance(many).startswith("Filled by 3 `run` commands")
     assert provenance(many).endswith("the last ended D on M")
+    timed = {**one, "wall_time_s_total": 3042.4}
+    assert provenance(timed) == "Run D on M in 51 min of wall time"
+    assert provenance({**many, "wall_time_s_total": 600.0}).endswith(
+        "the last ended D on M; the commands took 10 min of wall time in all"
+    )
     a = {"manifest": {"suite": {"name": "v1"}}, "results_dir": "docs/results/v1"}
     assert report_command(a).endswith("report --results docs/results/v1")
     a["longer"] = [{"dir": "x4"}, {"dir": "x10"}]

@@ -332,11 +332,14 @@ def provenance(manifest: dict[str, Any]) -> str:
     its directory (runs of earlier commands may have run on other machines)."""
     n = len(study_commands(manifest))
     where = f"{manifest['date']} on {manifest['machine']}"
+    total = manifest.get("wall_time_s_total")
     if n == 1:
-        return f"Run {where}"
+        took = "" if total is None else f" in {total / 60:.0f} min of wall time"
+        return f"Run {where}{took}"
+    took = "" if total is None else f"; the commands took {total / 60:.0f} min of wall time in all"
     return (
         f"Filled by {n} `run` commands into one directory (*How to run*; a command skips the "
-        f"runs already there), the last ended {where}"
+        f"runs already there), the last ended {where}{took}"
     )
 
 
