@@ -207,6 +207,18 @@ def test_longer_budgets_beside_the_quick_suite(local, tmp_path, capsys):
     assert "ppo's values here against the tuned ones" in text
     assert (tmp_path / "figures" / "bench" / "longer_x2_ppo_untuned_defaults.png").exists()
     assert f"--longer {longer} --longer {plain}" in text
+    # Same budgets, other hyperparameters: a variant, not a "longer" study.
+    variant = tmp_path / "x1-variant"
+    flags = ["--learners", "ppo", "--seeds", "1", "--set", "ppo.n_epochs=3"]
+    assert main([*common[:3], "--budget-scale", "1", *common[5:], *flags, "--out-dir",
+                 str(variant)]) == 0  # fmt: skip
+    a = write_report(out, md, reps=100, longer=[longer, variant])
+    text = md.read_text()
+    assert a["longer"][1]["scale"] == 1.0
+    assert "## Same budgets, other hyperparameters (ppo: `n_epochs`=3)" in text
+    assert "At the same budgets with other hyperparameters (*Same budgets" in text
+    assert "| P(variant > x1) |" in text and "| core-hours x1 → variant |" in text
+    assert "## Longer budgets (x1" not in text
     # A directory without results is a clear error, not a traceback.
     (tmp_path / "empty").mkdir()
     rc = main(

@@ -262,6 +262,18 @@ def test_a_run_records_its_machine_and_versions():
     assert rec["host"]["versions"]["sixaxis_avoid"] and "numpy" in rec["host"]["versions"]
 
 
+def test_a_longer_figure_name_stays_short_with_many_changes():
+    from sixaxis_avoid.benchmark.longer import figure_name
+
+    one = {"scale": 10.0, "learners": {"ppo": {"changed": {"lr_schedule": "linear"}}}}
+    assert figure_name(one) == "longer_x10_ppo_lr_schedule_linear"
+    many = {k: 0.000294916935807158 for k in ("learning_rate", "gamma", "batch_size", "buffer")}
+    a = {"scale": 1.0, "learners": {"qrdqn": {"changed": many}}}
+    b = {"scale": 1.0, "learners": {"qrdqn": {"changed": {**many, "gamma": 0.5}}}}
+    assert len(figure_name(a)) <= 60 and figure_name(a) != figure_name(b)
+    assert figure_name(a).startswith("longer_x1_qrdqn_")
+
+
 def test_curve_on_is_a_step_function():
     curve = [{"env_steps": 10, "score": 0.5}, {"env_steps": 100, "score": 1.0}]
     got = stats.curve_on(np.array([1, 10, 50, 100, 1000]), curve)

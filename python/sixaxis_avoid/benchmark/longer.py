@@ -17,6 +17,7 @@ Entry points: :func:`analyse_longer` (numbers), :func:`longer_figure` and
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 from pathlib import Path
@@ -39,6 +40,17 @@ def change_label(v: dict[str, Any]) -> str:
     return ", ".join(f"`{k}`={json.dumps(x)}" for k, x in v["changed"].items())
 
 
+def run_hours(runs: list[dict[str, Any]]) -> float:
+    """Hours of one core the runs took: each run's wall time (training, evaluations and
+    Algorithm 2), summed; unlike the driver's wall time it survives restarts."""
+    return sum(r["timing"].get("run_wall_time_s", r["timing"]["wall_time_s"]) for r in runs) / 3600
+
+
+def is_variant(lo: dict[str, Any]) -> bool:
+    """A study at the x1 budgets that changed hyperparameters: a variant, not a longer run."""
+    return lo["scale"] == 1 and bool(section_changes(lo))
+
+
 def section_changes(lo: dict[str, Any]) -> str:
     """What a longer study changed beyond the budget, learner by learner ('' if nothing)."""
     return "; ".join(
@@ -48,7 +60,10 @@ def section_changes(lo: dict[str, Any]) -> str:
 
 def figure_name(lo: dict[str, Any]) -> str:
     """A file name for a longer study's figure: its scale and what it changed."""
-    slug = re.sub(r"[^a-z0-9]+", "_", section_changes(lo).lower()).strip("_")
+    changes = section_changes(lo)
+    slug = re.sub(r"[^a-z0-9]+", "_", changes.lower()).strip("_")
+    if len(slug) > 60:  # many changed values: a short name, told apart by a digest
+        slug = slug[:40].rstrip("_") + "_" + hashlib.sha256(changes.encode()).hexdigest()[:8]
     return f"longer_x{lo['scale']:g}" + (f"_{slug}" if slug else "")
 
 
@@ -149,10 +164,8 @@ def analyse_longer(a: dict[str, Any], long_dir: Path, reps: int = stats.REPS) ->
             },
             "grid": grid.tolist(),
             "curves": curves,
-            "core_hours": sum(
-                r["timing"].get("run_wall_time_s", r["timing"]["wall_time_s"]) for r in long_runs
-            )
-            / 3600,
+            "core_hours": run_hours(long_runs),
+            "core_hours_x1_runs": run_hours(short_runs),
         }
     # Deep learners of the reported study left out, with what they would cost at the scale
     # most learners here ran at (their own summed run time at x1, times the scale).
@@ -218,20 +231,37 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
         return []
     scale = lo["scale"]
     changed = section_changes(lo)
-    L = [
-        f"## Longer budgets (x{scale:g}{', ' + changed if changed else ''})",
+    variant = is_variant(lo)
+    word = "variant" if variant else "longer"
+    here_text = "in the variant" if variant else "with the longer budget"
+    if variant:
+        L = [
+            f"## Same budgets, other hyperparameters ({changed})",
+            "",
+            "The same suite at the same budgets with other hyperparameters for the learners "
+            "below, set beside the same learners, tasks and seeds of the x1 study.",
+        ]
+    else:
+        L = [
+            f"## Longer budgets (x{scale:g}{', ' + changed if changed else ''})",
+            "",
+            f"The same suite with every deep budget multiplied by {scale:g} (hyperparameters "
+            f"as tuned at x1{', but ' + changed if changed else ', unchanged'}), for the "
+            "learners and seeds below, set beside the same learners, tasks and seeds of the x1 "
+            "study.",
+        ]
+    L[-1] += (
+        " Score: the final greedy path's SPL, as above; *best checkpoint* is the best score a "
+        "run's greedy path had at any checkpoint (it found that path, whether or not it kept "
+        f"it). P({word} > x1): the probability that a run here scores higher than one of the "
+        "x1 study on a random task (ties half), 95% CI. Core-hours: each run's own wall time, "
+        "summed, for the x1 runs and these."
+    )
+    L += [
         "",
-        f"The same suite with every deep budget multiplied by {scale:g} (hyperparameters as "
-        f"tuned at x1{', but ' + changed if changed else ', unchanged'}), for the learners and "
-        "seeds below, set beside the same "
-        "learners, tasks and seeds of the x1 study. Score: the final greedy path's SPL, as "
-        "above; *best checkpoint* is the best score a run's greedy path had at any checkpoint "
-        "(it found that path, whether or not it kept it). P(xK > x1): the probability that a "
-        "run with the longer budget scores higher than one at x1 on a random task (ties "
-        "half), 95% CI.",
-        "",
-        "| learner | seeds | env steps per run | IQM x1 | IQM longer | mean x1 | mean longer "
-        "| P(longer > x1) | success x1 → longer | best checkpoint (mean) | core-hours |",
+        f"| learner | seeds | env steps per run | IQM x1 | IQM {word} | mean x1 | mean {word} "
+        f"| P({word} > x1) | success x1 → {word} | best checkpoint (mean) "
+        f"| core-hours x1 → {word} |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for lr, v in lo["learners"].items():
@@ -243,7 +273,7 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
             f"| {fmt_ci(g['x1'], 'iqm')} | {fmt_ci(g['long'], 'iqm')} | {fmt_ci(g['x1'], 'mean')} "
             f"| {fmt_ci(g['long'], 'mean')} | {poi} "
             f"| {v['per_x1']['success_rate']:.2f} → {v['per_long']['success_rate']:.2f} "
-            f"| {g['best']['mean']:.2f} | {v['core_hours']:.2f} |"
+            f"| {g['best']['mean']:.2f} | {v['core_hours_x1_runs']:.2f} → {v['core_hours']:.2f} |"
         )
     for lr, v in lo["learners"].items():
         if change_label(v) == "untuned defaults":
@@ -255,7 +285,7 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
             ]
     L += [
         "",
-        "Did the longer curves plateau? Mean score at a quarter, half and all of each run's "
+        f"Did the {word} curves plateau? Mean score at a quarter, half and all of each run's "
         "env steps; runs whose score changed after half; mean best checkpoint; runs that ended "
         "below their best:",
         "",
@@ -264,7 +294,8 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
         "|---|---|---|---|---|---|---|---|",
     ]
     for lr, v in lo["learners"].items():
-        for label, key in (("x1", "plateau_x1"), (f"x{v['scale']:g}", "plateau_long")):
+        here = "variant" if variant else f"x{v['scale']:g}"
+        for label, key in (("x1", "plateau_x1"), (here, "plateau_long")):
             q = v[key]
             L.append(
                 f"| {lr} | {label} | {q['quarter']:.3f} | {q['half']:.3f} | {q['end']:.3f} | "
@@ -272,7 +303,7 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
             )
     L += [
         "",
-        "Mean final score per task (x1 → longer; best checkpoint in brackets):",
+        f"Mean final score per task (x1 → {word}; best checkpoint in brackets):",
         "",
         "| task | " + " | ".join(lo["learners"]) + " |",
         "|---|" + "---|" * len(lo["learners"]),
@@ -285,11 +316,14 @@ def longer_section(lo: dict[str, Any], figure_rel: str | None) -> list[str]:
         L.append(f"| {t} | " + " | ".join(cells) + " |")
     L.append("")
     if figure_rel:
-        L += [f"![Learning curves at x1 and with the longer budget]({figure_rel})", ""]
+        L += [
+            f"![Learning curves at x1 and {here_text}]({figure_rel})",
+            "",
+        ]
     if lo["not_run"]:
         L.append(
-            "Not run with the longer budget (the cost at this scale, estimated from their own "
-            "run time at x1): "
+            f"Not run {here_text} (the cost at this scale, estimated from their own run time "
+            "at x1): "
             + "; ".join(
                 f"{lr}: {v['runs']} runs, {v['core_hours_x1']:.1f} core-hours at x1, about "
                 f"{v['core_hours_estimate']:.0f} at x{scale:g}"

@@ -25,9 +25,11 @@ from sixaxis_avoid.benchmark.longer import (
     change_label,
     figure_name,
     fmt_ci,
+    is_variant,
     longer_figure,
     longer_section,
     n_seeds,
+    run_hours,
 )
 from sixaxis_avoid.benchmark.runner import load_runs, task_of
 
@@ -293,12 +295,6 @@ def plateau_section(a: dict[str, Any]) -> list[str]:
     ]
 
 
-def run_hours(runs: list[dict[str, Any]]) -> float:
-    """Hours of one core the runs took: each run's wall time (training, evaluations and
-    Algorithm 2), summed; unlike the driver's wall time it survives restarts."""
-    return sum(r["timing"].get("run_wall_time_s", r["timing"]["wall_time_s"]) for r in runs) / 3600
-
-
 def longer_headline(a: dict[str, Any]) -> list[str]:
     """One line per *Longer budgets* section: each learner's IQM at x1 and there."""
     out = []
@@ -308,17 +304,19 @@ def longer_headline(a: dict[str, Any]) -> list[str]:
         parts = []
         for lr, v in lo["learners"].items():
             g = v["agg"]["learners"]
-            change = change_label(v).replace("`", "")
+            # A variant's changes are listed in its section (often too many for a headline).
+            change = "" if is_variant(lo) else change_label(v).replace("`", "")
             parts.append(
                 f"**{lr}**{' (' + change + ')' if change else ''} IQM {g['x1']['iqm']:.2f} → "
                 f"{fmt_ci(g['long'], 'iqm')} on its {n_seeds(len(v['seeds']))}"
             )
-        out += [
-            f"With every deep budget x{lo['scale']:g} (*Longer budgets* below): "
-            + "; ".join(parts)
-            + ".",
-            "",
-        ]
+        where = (
+            "At the same budgets with other hyperparameters (*Same budgets, other "
+            "hyperparameters* below)"
+            if is_variant(lo)
+            else f"With every deep budget x{lo['scale']:g} (*Longer budgets* below)"
+        )
+        out += [f"{where}: " + "; ".join(parts) + ".", ""]
     return out
 
 
