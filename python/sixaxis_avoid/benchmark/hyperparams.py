@@ -76,12 +76,12 @@ def record_tuning(
 def suggest(trial: Any, learner: str) -> dict[str, Any]:
     """Optuna's draw of a learner's hyperparameters (env knobs included)."""
     c, f, i = trial.suggest_categorical, trial.suggest_float, trial.suggest_int
+    # QR-DQN's space is bounded in compute (see its n_quantiles below).
+    bounded = learner == "qrdqn"
     common = {
         "learning_rate": f("learning_rate", 1e-4, 3e-3, log=True),
         "gamma": c("gamma", [0.9, 0.95, 0.98, 0.99, 0.995]),
-        "net_arch": NET_ARCHS[
-            c("net_arch", QRDQN_NET_ARCHS if learner == "qrdqn" else list(NET_ARCHS))
-        ],
+        "net_arch": NET_ARCHS[c("net_arch", QRDQN_NET_ARCHS if bounded else list(NET_ARCHS))],
         "max_episode_steps": c("max_episode_steps", EPISODE_CAPS),
     }
     if learner in ("dqn", "qrdqn"):
@@ -91,9 +91,7 @@ def suggest(trial: Any, learner: str) -> dict[str, Any]:
         replay_ratio = c("replay_ratio", [0.0625, 0.125, 0.25, 0.5])
         hp = {
             **common,
-            "batch_size": c(
-                "batch_size", [32, 64, 128] if learner == "qrdqn" else [32, 64, 128, 256]
-            ),
+            "batch_size": c("batch_size", [32, 64, 128] if bounded else [32, 64, 128, 256]),
             "buffer_size": c("buffer_size", [10_000, 50_000, 100_000]),
             "learning_starts": c("learning_starts", [0, 500, 1000, 5000]),
             "target_update_interval": c("target_update_interval", [100, 500, 1000, 5000]),

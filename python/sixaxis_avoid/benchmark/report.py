@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -302,10 +303,11 @@ def longer_headline(a: dict[str, Any]) -> list[str]:
         if not lo["learners"]:
             continue
         parts = []
+        variant = is_variant(lo)
         for lr, v in lo["learners"].items():
             g = v["agg"]["learners"]
             # A variant's changes are listed in its section (often too many for a headline).
-            change = "" if is_variant(lo) else change_label(v).replace("`", "")
+            change = "" if variant else change_label(v).replace("`", "")
             parts.append(
                 f"**{lr}**{' (' + change + ')' if change else ''} IQM {g['x1']['iqm']:.2f} → "
                 f"{fmt_ci(g['long'], 'iqm')} on its {n_seeds(len(v['seeds']))}"
@@ -313,7 +315,7 @@ def longer_headline(a: dict[str, Any]) -> list[str]:
         where = (
             "At the same budgets with other hyperparameters (*Same budgets, other "
             "hyperparameters* below)"
-            if is_variant(lo)
+            if variant
             else f"With every deep budget x{lo['scale']:g} (*Longer budgets* below)"
         )
         out += [f"{where}: " + "; ".join(parts) + ".", ""]
@@ -345,14 +347,8 @@ def run_machines(runs: list[dict[str, Any]]) -> str:
     """Which machines a study's runs ran on (each run file's ``host.machine``): a deep run's
     floating-point result can depend on the CPU's vendor, so a study whose deep runs came
     from several machines says so."""
-    kinds: dict[str, int] = {}
-    unknown = 0
-    for r in runs:
-        m = r.get("host", {}).get("machine")
-        if m is None:
-            unknown += 1
-        else:
-            kinds[m] = kinds.get(m, 0) + 1
+    kinds = Counter(r.get("host", {}).get("machine") for r in runs)
+    unknown = kinds.pop(None, 0)
     if not kinds:
         return ""
     if len(kinds) == 1 and not unknown:
@@ -498,8 +494,8 @@ def markdown(
         f"{run_hours(a['runs']):.1f} core-hours (each run's own wall time, summed); load "
         f"average at the end {m['load_average']}. Versions: "
         + ", ".join(f"{k} {v}" for k, v in m["versions"].items())
-        + ". "
-        + run_machines(a["runs"]),
+        + "."
+        + "".join(f" {s}" for s in [run_machines(a["runs"])] if s),
         "",
         "## Headline",
         "",

@@ -10,6 +10,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import functools
 import hashlib
 import json
 import os
@@ -401,6 +402,7 @@ def run_study(
 # Study manifest
 
 
+@functools.cache
 def machine() -> str:
     """The CPU, core count and OS: the core's one description (``_core.machine``)."""
     from sixaxis_avoid import _core
@@ -408,6 +410,7 @@ def machine() -> str:
     return _core.machine()
 
 
+@functools.cache
 def versions() -> dict[str, str]:
     import importlib.metadata as md
 
