@@ -137,6 +137,7 @@ class TrainResult:
     def seed(self) -> int: ...
     @property
     def episodes(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]: ...
     @property
     def q(self) -> QArray: ...
     @property
@@ -151,18 +152,27 @@ class TrainResult:
 def train(
     scenario: ScenarioLike = None,
     *,
-    episodes: int | Literal["auto"] | None = None,
-    episode_cap: int | None = None,
-    seed: int | None = None,
+    extra_obstacles: Iterable[CellLike] | None = None,
+    initial_q: Literal["zero", "distance"] | QArray | None = None,
+    progress: Callable[[int], object] | None = None,
+    # options:train >>>
     assist: bool | None = None,
+    episodes: int | Literal["auto"] | None = None,
+    seed: int | None = None,
     detour: bool | None = None,
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
-    extra_obstacles: Iterable[CellLike] | None = None,
-    initial_q: Literal["zero", "distance"] | QArray | None = None,
     q_precision: Literal["f64", "f32"] | None = None,
-    progress: Callable[[int], object] | None = None,
+    alpha: float | None = None,
+    gamma: float | None = None,
+    epsilon_start: float | None = None,
+    epsilon_decay_episodes: int | None = None,
+    episode_cap: int | None = None,
+    # <<< options:train
 ) -> TrainResult: ...
+def options(
+    function: Literal["train", "plan"] = "train", scenario: ScenarioLike = None
+) -> list[dict[str, Any]]: ...
 def load_q(
     path: str | PathLike[str],
     scenario: ScenarioLike = None,
@@ -322,17 +332,23 @@ PathLearner = (
 def plan(
     scenario: ScenarioLike = None,
     *,
-    seed: int | None = None,
-    episodes: int | Literal["auto"] | None = None,
-    episode_cap: int | None = None,
+    learner: PathLearner | None = None,
+    # options:plan >>>
     assist: bool | None = None,
+    episodes: int | Literal["auto"] | None = None,
+    seed: int | None = None,
     detour: bool | None = None,
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
     initial_q: Literal["zero", "distance"] | None = None,
     q_precision: Literal["f64", "f32"] | None = None,
+    alpha: float | None = None,
+    gamma: float | None = None,
+    epsilon_start: float | None = None,
+    epsilon_decay_episodes: int | None = None,
+    episode_cap: int | None = None,
     max_replans: int | None = None,
-    learner: PathLearner | None = None,
+    # <<< options:plan
 ) -> PlanResult: ...
 def export_scenario(
     scenario: ScenarioLike = None,

@@ -16,7 +16,7 @@ use clap::Args;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 use sixaxis_core::grid::{Assist, GridWorld};
-use sixaxis_core::qlearning::{train, TrainOptions};
+use sixaxis_core::qlearning::{train, Learning, TrainReport};
 use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};
 use sixaxis_core::scenario::PoseSearchMode;
 use sixaxis_core::{Error, Scenario};
@@ -94,9 +94,9 @@ fn learn_condition(
     let learned = (0..a.seeds)
         .into_par_iter()
         .map(|seed| {
-            let mut opts = TrainOptions::from_scenario(s);
+            let mut opts = Learning::from_scenario(s);
             opts.seed = seed;
-            opts.assist = assist;
+            opts.set_assist(assist);
             if let Some(n) = a.episodes {
                 opts.episodes = n;
             }
@@ -112,7 +112,10 @@ fn learn_condition(
         for (acc, &n) in curve_sum.iter_mut().zip(&r.steps_per_episode) {
             *acc += n as f64;
         }
-        let mut v = crate::learn::train_json(s, world, &opts, &r, seed == 0);
+        let mut report = TrainReport::new(s, world, &opts, &r, seed == 0);
+        // The figures keep one curve of steps (seed 0's) and no per-episode success.
+        report.reached_per_episode = None;
+        let mut v = serde_json::to_value(report).expect("a report serialises");
         if seed != 0 {
             v.as_object_mut().expect("an object").remove("path");
         }
@@ -261,7 +264,7 @@ pub fn run(a: &ReproduceArgs) -> Result<Value, Failure> {
             .map(|seed| -> Result<Value, Failure> {
                 let mut opts = PlanOptions::from_scenario(s);
                 opts.train.seed = seed;
-                opts.train.assist = Assist::on();
+                opts.train.set_assist(Assist::on());
                 if let Some(n) = a.episodes {
                     opts.train.episodes = n;
                 }
