@@ -16,3 +16,5 @@ for r in 30 10; do
   python -m sixaxis_avoid.verify --table --link-radius-mm "$r" --json "docs/figures/verify_table_${r}mm.json" \
     | bash scripts/splice_shown.sh docs/INTEROP.md "verify-${r}mm"
 done
+# README.md shows copies of generated sections (the tables above): refresh them.
+python scripts/docsections.py --sync README.md

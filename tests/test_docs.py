@@ -12,6 +12,8 @@ import re
 import subprocess
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 WORD = "SP" + "EC"  # spelt in two parts so that this file does not mention it
 #: Files that still mention it, each with why. Each entry must still be needed (checked).
@@ -58,7 +60,9 @@ def test_no_file_mentions_the_spec_file():
 
 
 def test_every_cited_section_exists():
-    cited = [(f, *m.groups()) for f, t in texts().items() for m in CITATION.finditer(t)]
+    # This file's own examples (docstring, test below) are not citations.
+    files = {f: t for f, t in texts().items() if f != "tests/test_docs.py"}
+    cited = [(f, *m.groups()) for f, t in files.items() for m in CITATION.finditer(t)]
     # The files that rely on docs/SCENARIOS.md for a fact say where it is stated.
     assert {f for f, _, _ in cited} >= {
         "rust/core/src/grid.rs",
@@ -83,3 +87,40 @@ def test_a_wrong_citation_is_caught():
     assert sections == ["Units and the arm", "No such section"]
     page = headings(ROOT / "docs" / "SCENARIOS.md")
     assert [s in page for s in sections] == [True, False]
+
+
+def load_docsections():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "docsections", ROOT / "scripts" / "docsections.py"
+    )
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_readme_sections_equal_their_generated_sources():
+    ds = load_docsections()
+    mine = ds.sections((ROOT / "README.md").read_text())
+    assert {"reproduction-learning-time", "benchmark-aggregate"} <= set(mine)
+    pages = sorted((ROOT / "docs").glob("*.md"))
+    for name, text in mine.items():
+        source = ds.source_of(name, pages)
+        assert text == ds.sections(source.read_text())[name], (
+            f"README.md section {name} differs from {source.name}: "
+            "run python scripts/docsections.py --sync README.md"
+        )
+
+
+def test_sync_copies_a_changed_section(tmp_path):
+    ds = load_docsections()
+    page, readme = tmp_path / "PAGE.md", tmp_path / "README.md"
+    page.write_text("# Page\n\n<!-- t:begin -->\n| a | 2 |\n<!-- t:end -->\n")
+    readme.write_text("# Readme\n\n<!-- t:begin -->\n| a | 1 |\n<!-- t:end -->\n\nend\n")
+    assert ds.sync(readme, [page]) == ["t"]
+    assert readme.read_text() == "# Readme\n\n<!-- t:begin -->\n| a | 2 |\n<!-- t:end -->\n\nend\n"
+    assert ds.sync(readme, [page]) == []
+    readme.write_text("<!-- u:begin -->\nx\n<!-- u:end -->\n")
+    with pytest.raises(SystemExit, match="'u': found in no page"):
+        ds.sync(readme, [page])
