@@ -567,6 +567,8 @@ fn report(result: &Value, figures: Option<&Path>, json_path: &Path, a: &Reproduc
     );
     let _ = writeln!(r, "## Learning time with and without assisted learning\n");
     let _ = writeln!(r, "The paper reports one run per condition in seconds (its own implementation and machine); ours is the mean ± standard deviation over seeds, in milliseconds, of the native Rust learner on one core. Absolute times are not comparable; the ratios are the figures to compare. Wall times of a few milliseconds move with the machine's load; the environment-step ratio does not, and is the machine-independent measure of the speed-up.\n");
+    // A marked section (scripts/docsections.py): README.md shows a copy of it.
+    let _ = writeln!(r, "<!-- reproduction-learning-time:begin -->");
     let _ = writeln!(r, "| scenario | paper: without (s) | paper: with (s) | paper ratio | ours: without (ms) | ours: with (ms) | our time ratio | env steps without | env steps with | our step ratio |");
     let _ = writeln!(r, "|---|---|---|---|---|---|---|---|---|---|");
     for s in result["scenarios"].as_array().into_iter().flatten() {
@@ -599,6 +601,7 @@ fn report(result: &Value, figures: Option<&Path>, json_path: &Path, a: &Reproduc
             fmt_opt(&json!(step_ratio), 2),
         );
     }
+    let _ = writeln!(r, "<!-- reproduction-learning-time:end -->");
     let _ = writeln!(r, "\n## Learned paths against the shortest path\n");
     let _ = writeln!(r, "The shortest terminal path is found by breadth-first search on the same grid (same collision rule). A learned path is the greedy rollout after training (eq. 8).\n");
     let _ = writeln!(r, "| scenario | shortest (steps) | condition | reached target | mean learned length | mean converged episode |");

@@ -16,7 +16,7 @@
 //! assert_eq!((t.reward, t.collided), (-15000.0, false));
 //! ```
 //!
-//! # Semantics (SPEC section 2)
+//! # Semantics (docs/SCENARIOS.md "The grid world: states, actions, collisions, rewards")
 //!
 //! - **States** are the cells inside `bounds` (inclusive box), numbered row-major over
 //!   (x, y, z) with z fastest: `s = ((x - min_x) * ny + (y - min_y)) * nz + (z - min_z)`.

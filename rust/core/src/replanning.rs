@@ -229,7 +229,8 @@ pub struct RoundSummary {
     pub mode: PoseSearchMode,
 }
 
-/// The result of [`plan`]; serialises to the JSON of `sixaxis plan` (SPEC section 3).
+/// The result of [`plan`]; serialises to the JSON of `sixaxis plan`
+/// (docs/SCENARIOS.md "JSON outputs of the CLI").
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PlanResult {
     /// Whether every path point got a safe pose.
