@@ -11,6 +11,8 @@ echo "== cargo doc";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet -
 echo "== ruff";         ruff check python tests scripts && ruff format --check python tests scripts
 # The hand-written stub python/sixaxis_avoid/_core.pyi against the built extension.
 echo "== stubtest";     python -m mypy.stubtest sixaxis_avoid._core
+# What files hold of the core's option declarations (stub keywords, docs table) is current.
+echo "== options";      python scripts/derive_options.py --check
 echo "== cargo test";   cargo test --workspace --release
 # Slow learning runs (marker `slow`) are left out here; scripts/test_slow.sh runs them.
 echo "== pytest";       python -m pytest tests -q -m "not slow"

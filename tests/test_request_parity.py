@@ -245,3 +245,19 @@ def test_options_describe_their_domains():
         sa.train(SCENARIO, sede=1)
     with pytest.raises(sa.InvalidArgumentError, match="`alpha` = 0: must be a number in"):
         sa.train(SCENARIO, alpha=0)
+
+
+def test_stub_and_docs_follow_the_declaration():
+    """The stub's option keywords and docs/SCENARIOS.md's table are derived from the core's
+    declaration (scripts/derive_options.py); a stale copy fails here."""
+    import pathlib
+    import sys
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    proc = subprocess.run(
+        [sys.executable, str(root / "scripts" / "derive_options.py"), "--check"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr

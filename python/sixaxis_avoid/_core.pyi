@@ -211,7 +211,8 @@ def train(
     # <<< options:train
 ) -> TrainResult: ...
 def options(
-    function: Literal["train", "plan"] = "train", scenario: _ScenarioLike = None
+    function: Literal["train", "plan", "generate_scenario"] = "train",
+    scenario: _ScenarioLike = None,
 ) -> list[dict[str, Any]]: ...
 def load_q(
     path: str | PathLike[str],
@@ -403,12 +404,10 @@ def export_scenario(
 ) -> str: ...
 def generate_scenario(
     seed: int,
-    density: float = 0.08,
+    *,
     bounds: tuple[_CellLike, _CellLike] | dict[str, _CellLike] | None = None,
-    min_start_target_distance: float = 4.0,
-    require_arm_reachable: bool = True,
-    template: str = "paper_simple",
-    max_attempts: int | None = None,
+    # options:generate_scenario >>>
+    # <<< options:generate_scenario
 ) -> Scenario: ...
 def write_atomic(path: str | PathLike[str], data: bytes | str) -> None: ...
 def machine() -> str: ...

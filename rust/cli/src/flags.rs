@@ -6,17 +6,21 @@
 //! as from Python or a request file.
 
 use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches};
-use sixaxis_core::options::{Domain, OptionInfo, Options};
+use sixaxis_core::generator::{generator_options, GeneratorOptions, GENERATOR_OPTIONS};
+use sixaxis_core::options::{Domain, OptionInfo, OptionValue, Options};
 use sixaxis_core::request::{plan_options, train_options};
 
-/// The help text of an option: its doc line, its unit and where its default comes from.
-fn help(i: &OptionInfo) -> String {
+/// The help text of an option: its doc line, its unit and where its default comes from
+/// (a scenario field, or the value in `defaults`).
+fn help(i: &OptionInfo, defaults: &[(&str, OptionValue)]) -> String {
     let mut h = i.doc_line();
     if !i.unit.is_empty() {
         h.push_str(&format!(" [{}]", i.unit));
     }
     if !i.field.is_empty() {
         h.push_str(&format!(" (default: the scenario's `{}`)", i.field));
+    } else if let Some((_, v)) = defaults.iter().find(|(k, _)| *k == i.key) {
+        h.push_str(&format!(" (default: {v})"));
     }
     h
 }
@@ -28,6 +32,7 @@ fn value_name(d: &Domain) -> String {
         Domain::Float { .. } => "X".into(),
         Domain::Bool => "BOOL".into(),
         Domain::Choice(names) => names.join("|"),
+        Domain::Text => "TEXT".into(),
     }
 }
 
@@ -36,7 +41,7 @@ fn off_id(key: &str) -> String {
 }
 
 /// `cmd` with a flag for every option of `infos`.
-fn add(mut cmd: Command, infos: &[OptionInfo]) -> Command {
+fn add(mut cmd: Command, infos: &[OptionInfo], defaults: &[(&str, OptionValue)]) -> Command {
     for i in infos {
         let flag = i.flag();
         if i.domain == Domain::Bool {
@@ -47,7 +52,7 @@ fn add(mut cmd: Command, infos: &[OptionInfo]) -> Command {
                         .action(ArgAction::SetTrue)
                         .help(format!(
                             "{} On with this flag, off with `--no-{}`.",
-                            help(i),
+                            help(i, defaults),
                             &flag[2..]
                         )),
                 )
@@ -64,7 +69,7 @@ fn add(mut cmd: Command, infos: &[OptionInfo]) -> Command {
                     .long(flag[2..].to_string())
                     .value_name(value_name(&i.domain))
                     .allow_hyphen_values(true)
-                    .help(help(i)),
+                    .help(help(i, defaults)),
             );
         }
     }
@@ -102,7 +107,7 @@ fn parse(given: &[(String, String)], infos: &[OptionInfo]) -> sixaxis_core::Resu
 }
 
 macro_rules! flag_set {
-    ($(#[$m:meta])* $name:ident, $infos:expr) => {
+    ($(#[$m:meta])* $name:ident, $infos:expr, $defaults:expr) => {
         $(#[$m])*
         #[derive(Debug, Clone, Default)]
         pub struct $name(pub Vec<(String, String)>);
@@ -126,10 +131,10 @@ macro_rules! flag_set {
 
         impl Args for $name {
             fn augment_args(cmd: Command) -> Command {
-                add(cmd, &$infos)
+                add(cmd, &$infos, &$defaults)
             }
             fn augment_args_for_update(cmd: Command) -> Command {
-                add(cmd, &$infos)
+                add(cmd, &$infos, &$defaults)
             }
         }
     };
@@ -147,10 +152,21 @@ fn plan_only() -> Vec<OptionInfo> {
 flag_set!(
     /// The flags of a training run's options (`sixaxis train`, `sixaxis plan`).
     TrainFlags,
-    train_options()
+    train_options(),
+    Vec::new()
 );
 flag_set!(
     /// The flags Algorithm 2 adds (`sixaxis plan`).
     PlanFlags,
-    plan_only()
+    plan_only(),
+    vec![("learner", OptionValue::Text("qlearning".into()))]
+);
+flag_set!(
+    /// The flags of `sixaxis generate` (the options of the scenario generator).
+    GeneratorFlags,
+    generator_options(),
+    GENERATOR_OPTIONS
+        .iter()
+        .map(|s| (s.info.key, (s.get)(&GeneratorOptions::default())))
+        .collect::<Vec<_>>()
 );

@@ -118,15 +118,8 @@ enum Command {
         /// Seed; `generated:SEED` names the same scenario at the default density and bounds.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Fraction of the cells in bounds that become obstacles.
-        #[arg(long, default_value_t = 0.08)]
-        density: f64,
-        /// Smallest start-target distance, cells.
-        #[arg(long, default_value_t = 4.0)]
-        min_distance: f64,
-        /// Do not require a clear arm pose at the start and the target.
-        #[arg(long)]
-        no_arm_check: bool,
+        #[command(flatten)]
+        options: flags::GeneratorFlags,
         #[command(flatten)]
         out: OutArgs,
     },
@@ -327,19 +320,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let s = Scenario::load(&scenario)?;
             emit_text(&sixaxis_core::export::export(&s, format), &out)
         }
-        Command::Generate {
-            seed,
-            density,
-            min_distance,
-            no_arm_check,
-            out,
-        } => {
-            let opts = sixaxis_core::generator::GeneratorOptions {
-                density,
-                min_start_target_distance: min_distance,
-                require_arm_reachable: !no_arm_check,
-                ..Default::default()
-            };
+        Command::Generate { seed, options, out } => {
+            let opts =
+                sixaxis_core::generator::GeneratorOptions::default().with(&options.options()?)?;
             let s = sixaxis_core::generator::generate(&opts, seed)?;
             emit(
                 &serde_json::to_value(&s).expect("scenarios serialise"),

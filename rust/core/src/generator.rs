@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::grid::GridWorld;
+use crate::options::{apply, Domain, FromOption, OptionInfo, OptionSpec, Options, ToOption};
 use crate::planner::PosePlanner;
 use crate::scenario::{Bounds, Cell, PoseSearchMode, Scenario};
 
@@ -69,6 +70,117 @@ impl Default for GeneratorOptions {
     }
 }
 
+/// The domain of `density`: a fraction of the cells, [0, 0.6].
+const DENSITY: Domain = Domain::Float {
+    min: 0.0,
+    max: 0.6,
+    open_min: false,
+};
+/// The domain of `min_start_target_distance`: at least one cell.
+const MIN_DISTANCE: Domain = Domain::Float {
+    min: 1.0,
+    max: f64::INFINITY,
+    open_min: false,
+};
+
+/// The options of [`generate`] a caller sets by key (the Python keywords of
+/// `generate_scenario` and the flags of `sixaxis generate`), declared once; `bounds` (a
+/// pair of cells, a Python keyword) and `pose_search` are set on [`GeneratorOptions`].
+pub static GENERATOR_OPTIONS: [OptionSpec<GeneratorOptions>; 5] = [
+    OptionSpec {
+        info: OptionInfo {
+            key: "density",
+            field: "",
+            domain: DENSITY,
+            unit: "fraction of the cells",
+            doc: "Fraction of the cells in bounds that become obstacles.",
+        },
+        get: |o| o.density.to_option(),
+        set: |o, key, v| {
+            o.density = f64::from_option(key, &DENSITY, v)?;
+            Ok(())
+        },
+    },
+    OptionSpec {
+        info: OptionInfo {
+            key: "min_start_target_distance",
+            field: "",
+            domain: MIN_DISTANCE,
+            unit: "cells",
+            doc: "Smallest straight-line distance between start and target.",
+        },
+        get: |o| o.min_start_target_distance.to_option(),
+        set: |o, key, v| {
+            o.min_start_target_distance = f64::from_option(key, &MIN_DISTANCE, v)?;
+            Ok(())
+        },
+    },
+    OptionSpec {
+        info: OptionInfo {
+            key: "require_arm_reachable",
+            field: "",
+            domain: Domain::Bool,
+            unit: "",
+            doc: "Require a clear arm pose at the start and at the target.",
+        },
+        get: |o| o.require_arm_reachable.to_option(),
+        set: |o, key, v| {
+            o.require_arm_reachable = bool::from_option(key, &Domain::Bool, v)?;
+            Ok(())
+        },
+    },
+    OptionSpec {
+        info: OptionInfo {
+            key: "max_attempts",
+            field: "",
+            domain: Domain::u32_from(1),
+            unit: "draws",
+            doc: "Draws of start, target and obstacles before giving up.",
+        },
+        get: |o| o.max_attempts.to_option(),
+        set: |o, key, v| {
+            o.max_attempts = u32::from_option(key, &Domain::u32_from(1), v)?;
+            Ok(())
+        },
+    },
+    OptionSpec {
+        info: OptionInfo {
+            key: "template",
+            field: "",
+            domain: Domain::Text,
+            unit: "",
+            doc: "The scenario (built-in name or file) every other field comes from: rewards, learning, arm, safe distances, planning.",
+        },
+        get: |o| o.template.to_option(),
+        set: |o, key, v| {
+            o.template = String::from_option(key, &Domain::Text, v)?;
+            Ok(())
+        },
+    },
+];
+
+/// What each option of [`GENERATOR_OPTIONS`] is.
+pub fn generator_options() -> Vec<OptionInfo> {
+    GENERATOR_OPTIONS.iter().map(|s| s.info).collect()
+}
+
+impl GeneratorOptions {
+    /// These options with `values` set by key (see [`GENERATOR_OPTIONS`]), each checked.
+    pub fn with(mut self, values: &Options) -> Result<Self> {
+        let table: Vec<&OptionSpec<GeneratorOptions>> = GENERATOR_OPTIONS.iter().collect();
+        apply(&table, values, &mut self)?;
+        Ok(self)
+    }
+
+    /// Check every keyed option against its domain; the error names the key.
+    pub fn check(&self) -> Result<()> {
+        for spec in &GENERATOR_OPTIONS {
+            (spec.set)(&mut self.clone(), spec.info.key, &(spec.get)(self))?;
+        }
+        Ok(())
+    }
+}
+
 /// Member `seed` of the fixed benchmark set (default options), named `generated:SEED`.
 pub fn benchmark_scenario(seed: u64) -> Result<Scenario> {
     generate(&GeneratorOptions::default(), seed)
@@ -81,20 +193,7 @@ fn dist(a: Cell, b: Cell) -> f64 {
 
 /// Generate one scenario. Deterministic: the same options and seed give the same scenario.
 pub fn generate(opts: &GeneratorOptions, seed: u64) -> Result<Scenario> {
-    if !(0.0..=0.6).contains(&opts.density) {
-        return Err(Error::argument(
-            "density",
-            opts.density,
-            "must be in [0, 0.6]",
-        ));
-    }
-    if !opts.min_start_target_distance.is_finite() || opts.min_start_target_distance < 1.0 {
-        return Err(Error::argument(
-            "min_start_target_distance",
-            opts.min_start_target_distance,
-            "must be a finite number >= 1 cell",
-        ));
-    }
+    opts.check()?;
     let template = Scenario::open(&opts.template)?;
     let b = opts.bounds;
     if (0..3).any(|i| b.min[i] > b.max[i]) {

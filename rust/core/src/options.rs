@@ -68,6 +68,8 @@ pub enum Domain {
     Bool,
     /// One of these names.
     Choice(&'static [&'static str]),
+    /// Any non-empty text (a name or a path).
+    Text,
 }
 
 impl Domain {
@@ -110,6 +112,7 @@ impl Domain {
             }
             Domain::Bool => "must be true or false".to_string(),
             Domain::Choice(names) => format!("must be one of {}", names.join(", ")),
+            Domain::Text => "must be a non-empty text".to_string(),
         }
     }
 
@@ -121,6 +124,7 @@ impl Domain {
             Domain::Float { .. } => "float",
             Domain::Bool => "bool",
             Domain::Choice(_) => "choice",
+            Domain::Text => "text",
         }
     }
 
@@ -139,7 +143,7 @@ impl Domain {
                 "false" => Ok(OptionValue::Bool(false)),
                 _ => Err(bad()),
             },
-            Domain::Choice(_) => Ok(OptionValue::Text(t.to_string())),
+            Domain::Choice(_) | Domain::Text => Ok(OptionValue::Text(t.to_string())),
         }
     }
 }
@@ -385,6 +389,21 @@ impl FromOption for bool {
 impl ToOption for bool {
     fn to_option(&self) -> OptionValue {
         OptionValue::Bool(*self)
+    }
+}
+
+impl FromOption for String {
+    fn from_option(key: &str, domain: &Domain, v: &OptionValue) -> Result<Self> {
+        match v {
+            OptionValue::Text(t) if !t.trim().is_empty() => Ok(t.clone()),
+            _ => Err(Error::argument(key, v, domain.reason())),
+        }
+    }
+}
+
+impl ToOption for String {
+    fn to_option(&self) -> OptionValue {
+        OptionValue::Text(self.clone())
     }
 }
 

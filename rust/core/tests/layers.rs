@@ -10,8 +10,25 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
     for entry in std::fs::read_dir(&src).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
-        if path.extension().is_some_and(|e| e == "rs") && name != "lib" {
-            let text = std::fs::read_to_string(&path).unwrap();
+        // A module is a file `src/m.rs` or a folder `src/m/` (its files together).
+        let files: Vec<std::path::PathBuf> = if path.is_dir() {
+            std::fs::read_dir(&path)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+                .collect()
+        } else if path.extension().is_some_and(|e| e == "rs") && name != "lib" {
+            vec![path.clone()]
+        } else {
+            vec![]
+        };
+        if !files.is_empty() {
+            let text: String = files
+                .iter()
+                .filter(|p| !p.ends_with("tests.rs"))
+                .map(|p| std::fs::read_to_string(p).unwrap())
+                .collect::<Vec<_>>()
+                .join("\n");
             // Non-test code, comments left out.
             let text = text.split("#[cfg(test)]").next().unwrap().to_string();
             let lines: Vec<&str> = text

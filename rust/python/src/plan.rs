@@ -9,7 +9,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
-use sixaxis_core::generator::{generate, GeneratorOptions};
+use sixaxis_core::generator::{generate, generator_options, GeneratorOptions};
 use sixaxis_core::options::{Domain, OptionValue};
 use sixaxis_core::replanning::{
     plan as core_plan, BfsLearner, LearnedPath, PathLearner, PlanResult, Round,
@@ -407,33 +407,21 @@ fn bounds_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Bounds> {
 /// ``Scenario.load("generated:i")`` loads. Raises :class:`InvalidArgumentError` for a bad
 /// keyword, or when ``max_attempts`` draws find no scenario meeting the guarantees.
 #[pyfunction]
-#[pyo3(signature = (seed, density=0.08, bounds=None, min_start_target_distance=4.0, require_arm_reachable=true, template="paper_simple", max_attempts=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (seed, *, bounds=None, **options))]
 pub fn generate_scenario(
     py: Python<'_>,
     seed: &Bound<'_, PyAny>,
-    density: f64,
     bounds: Option<&Bound<'_, PyAny>>,
-    min_start_target_distance: f64,
-    require_arm_reachable: bool,
-    template: &str,
-    max_attempts: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyScenario> {
-    let mut opts = GeneratorOptions::default();
     let seed_domain = Domain::u64_from(0);
     let seed = int_in(py, "seed", &seed_domain, Some(seed))?
         .ok_or_else(|| invalid_argument(py, "seed", "None", seed_domain.reason()))?
         as u64;
-    opts.density = finite(py, "density", density)?;
+    let values = options_of(py, "generate_scenario", &generator_options(), options)?;
+    let mut opts = run_attached(py, || GeneratorOptions::default().with(&values))?;
     if let Some(b) = bounds.filter(|b| !b.is_none()) {
         opts.bounds = bounds_arg(py, b)?;
-    }
-    opts.min_start_target_distance =
-        finite(py, "min_start_target_distance", min_start_target_distance)?;
-    opts.require_arm_reachable = require_arm_reachable;
-    opts.template = template.to_string();
-    if let Some(m) = int_in(py, "max_attempts", &Domain::u32_from(1), max_attempts)? {
-        opts.max_attempts = m as u32;
     }
     let s = run(py, || generate(&opts, seed))?;
     Ok(PyScenario::new(s))

@@ -6,8 +6,9 @@
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString};
+use sixaxis_core::generator::{generator_options, GeneratorOptions, GENERATOR_OPTIONS};
 use sixaxis_core::options::{Domain, OptionInfo, OptionValue, Options};
-use sixaxis_core::request::{plan_options, train_options, TrainRequest};
+use sixaxis_core::request::{option_values, plan_options, train_options, TrainRequest};
 use sixaxis_core::Scenario;
 
 use crate::convert::repr;
@@ -96,7 +97,7 @@ fn value_of(
                 return Err(bad());
             }
         }
-        Domain::Choice(_) => match o.cast::<PyString>() {
+        Domain::Choice(_) | Domain::Text => match o.cast::<PyString>() {
             Ok(t) => OptionValue::Text(t.to_string()),
             Err(_) => return Err(bad()),
         },
@@ -176,7 +177,8 @@ fn value_to_py<'py>(py: Python<'py>, v: &OptionValue) -> PyResult<Bound<'py, PyA
     })
 }
 
-/// The options of :func:`train` (``"train"``) or :func:`plan` (``"plan"``) as a list of
+/// The options of :func:`train` (``"train"``), :func:`plan` (``"plan"``) or
+/// :func:`generate_scenario` (``"generate_scenario"``; defaults its own) as a list of
 /// dicts, one per keyword, in the order they apply: ``key``, ``field`` (the scenario field
 /// it overrides, or ``""``), ``kind`` (``int``, ``int|auto``, ``float``, ``bool``,
 /// ``choice``), ``min``/``max`` (numbers), ``choices`` (names), ``unit``, ``doc`` and
@@ -222,7 +224,7 @@ pub fn options<'py>(
                 d.set_item("min_exclusive", open_min)?;
             }
             Domain::Choice(names) => d.set_item("choices", names.to_vec())?,
-            Domain::Bool => {}
+            Domain::Bool | Domain::Text => {}
         }
         d.set_item("unit", i.unit)?;
         d.set_item("doc", i.doc_line())?;
