@@ -81,8 +81,8 @@ pub struct Clearance {
     model: ClearanceModel,
     /// d_p, cells (centres model).
     arm_safe_distance_cells: f64,
-    /// Whether the CPU has AVX (x86_64): picks the 4-wide eq. 11 kernel.
-    avx: bool,
+    /// The eq. 11 kernel `min_d2` runs.
+    kernel: Eq11Kernel,
     /// Obstacle boxes in mm (the centres of `centre` boxes are also in `xs`/`ys`/`zs`,
     /// after the `count` cubes).
     boxes: Vec<ObstacleBox>,
@@ -244,7 +244,6 @@ fn capsule_cube_gap_mm(
 /// Eq. 11 kernel, portable version: smallest squared distance (cells²) from the obstacle
 /// centres (chunks of four) to one segment. Same operations, in the same order, as the SSE2
 /// version, so both give the same bits.
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[allow(clippy::needless_range_loop)] // lanes of three arrays
 #[inline(always)]
 fn seg_min_d2_scalar(
@@ -398,6 +397,133 @@ unsafe fn min_d2_avx(
     m
 }
 
+/// The eq. 11 kernels under comparison (docs/PERFORMANCE.md, "Eq. 11 kernels").
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Eq11Kernel {
+    /// Hand-written AVX intrinsics (run-time detected).
+    Avx,
+    /// Hand-written SSE2 intrinsics.
+    Sse2,
+    /// Plain loop with one running minimum.
+    Scalar,
+    /// Plain loop with one running minimum per lane (auto-vectorised, baseline target).
+    Lanes,
+    /// The same plain loop compiled with AVX enabled (run-time detected).
+    LanesAvx,
+    /// The `wide` crate's `f64x4`.
+    Wide,
+}
+
+/// Eq. 11 kernel, plain loop with a running minimum per lane: the element-wise `if`s are
+/// `maxpd`/`minpd`, so LLVM vectorises it and it gives the same bits as the other kernels.
+#[allow(clippy::needless_range_loop)] // lanes of three arrays
+#[inline(always)]
+fn seg_min_d2_lanes(xs: &[[f64; LANES]], ys: &[[f64; LANES]], zs: &[[f64; LANES]], s: &Seg) -> f64 {
+    let mut acc = [f64::INFINITY; LANES];
+    for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
+        for l in 0..LANES {
+            let px = x4[l] - s.a[0];
+            let py = y4[l] - s.a[1];
+            let pz = z4[l] - s.a[2];
+            let dot = px * s.d[0] + py * s.d[1] + pz * s.d[2];
+            let w = dot * s.inv_dd;
+            let w = if w > 0.0 { w } else { 0.0 };
+            let w = if w < 1.0 { w } else { 1.0 };
+            let ex = px - w * s.d[0];
+            let ey = py - w * s.d[1];
+            let ez = pz - w * s.d[2];
+            let d2 = ex * ex + ey * ey + ez * ez;
+            acc[l] = if d2 < acc[l] { d2 } else { acc[l] };
+        }
+    }
+    let lo = if acc[0] < acc[2] { acc[0] } else { acc[2] };
+    let hi = if acc[1] < acc[3] { acc[1] } else { acc[3] };
+    if lo < hi {
+        lo
+    } else {
+        hi
+    }
+}
+
+/// Eq. 11 kernel with the `wide` crate (SSE2 pairs unless the build enables AVX).
+#[inline(always)]
+fn seg_min_d2_wide(xs: &[[f64; LANES]], ys: &[[f64; LANES]], zs: &[[f64; LANES]], s: &Seg) -> f64 {
+    use wide::f64x4;
+    let (ax, ay, az) = (
+        f64x4::splat(s.a[0]),
+        f64x4::splat(s.a[1]),
+        f64x4::splat(s.a[2]),
+    );
+    let (dx, dy, dz) = (
+        f64x4::splat(s.d[0]),
+        f64x4::splat(s.d[1]),
+        f64x4::splat(s.d[2]),
+    );
+    let inv = f64x4::splat(s.inv_dd);
+    let zero = f64x4::splat(0.0);
+    let one = f64x4::splat(1.0);
+    let mut acc = f64x4::splat(f64::INFINITY);
+    for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
+        let px = f64x4::new(*x4) - ax;
+        let py = f64x4::new(*y4) - ay;
+        let pz = f64x4::new(*z4) - az;
+        let dot = px * dx + py * dy + pz * dz;
+        let w = (dot * inv).fast_max(zero).fast_min(one);
+        let ex = px - w * dx;
+        let ey = py - w * dy;
+        let ez = pz - w * dz;
+        let d2 = ex * ex + ey * ey + ez * ez;
+        acc = d2.fast_min(acc);
+    }
+    let a = acc.to_array();
+    let lo = if a[0] < a[2] { a[0] } else { a[2] };
+    let hi = if a[1] < a[3] { a[1] } else { a[3] };
+    if lo < hi {
+        lo
+    } else {
+        hi
+    }
+}
+
+/// The segment loop of `min_d2` around one per-segment kernel.
+#[inline(always)]
+fn min_d2_segments(points: &ArmPoints, scale: f64, stop: f64, kernel: impl Fn(&Seg) -> f64) -> f64 {
+    let mut m = f64::INFINITY;
+    let mut used = false;
+    for k in 0..8 {
+        let Some(s) = Seg::pick(points, k, scale, used) else {
+            continue;
+        };
+        used = true;
+        let d2 = kernel(&s);
+        if d2 < m {
+            m = d2;
+            if m <= stop {
+                break;
+            }
+        }
+    }
+    m
+}
+
+/// [`seg_min_d2_lanes`] compiled with AVX.
+///
+/// # Safety
+/// The CPU must support AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn min_d2_lanes_avx(
+    xs: &[[f64; LANES]],
+    ys: &[[f64; LANES]],
+    zs: &[[f64; LANES]],
+    points: &ArmPoints,
+    scale: f64,
+    stop: f64,
+) -> f64 {
+    min_d2_segments(points, scale, stop, |s| seg_min_d2_lanes(xs, ys, zs, s))
+}
+
 /// The links of the capsules model: the polyline's segments, zero-length ones left out (such
 /// a ball lies inside its neighbour's capsule, the polyline being connected) unless all are.
 fn capsule_links(points: &ArmPoints) -> impl Iterator<Item = (&Vector3<f64>, &Vector3<f64>)> {
@@ -452,7 +578,11 @@ impl Clearance {
             cell_mm,
             model,
             arm_safe_distance_cells,
-            avx: cpu_has_avx(),
+            kernel: if cpu_has_avx() {
+                Eq11Kernel::Avx
+            } else {
+                Eq11Kernel::Sse2
+            },
             boxes: Vec::new(),
             centre_count: count,
         }
@@ -552,30 +682,43 @@ impl Clearance {
             return f64::NAN;
         }
         let scale = 1.0 / self.cell_mm;
-        #[cfg(target_arch = "x86_64")]
-        if self.avx {
-            // SAFETY: `avx` is true only when the CPU supports AVX.
-            return unsafe { min_d2_avx(&self.xs, &self.ys, &self.zs, points, scale, stop) };
-        }
-        let mut m = f64::INFINITY;
-        let mut used = false;
-        for k in 0..8 {
-            let Some(s) = Seg::pick(points, k, scale, used) else {
-                continue;
-            };
-            used = true;
+        let (xs, ys, zs) = (&self.xs[..], &self.ys[..], &self.zs[..]);
+        match self.kernel {
             #[cfg(target_arch = "x86_64")]
-            let d2 = seg_min_d2_sse2(&self.xs, &self.ys, &self.zs, &s);
-            #[cfg(not(target_arch = "x86_64"))]
-            let d2 = seg_min_d2_scalar(&self.xs, &self.ys, &self.zs, &s);
-            if d2 < m {
-                m = d2;
-                if m <= stop {
-                    break;
-                }
+            // SAFETY: `Avx` is chosen only when the CPU supports AVX.
+            Eq11Kernel::Avx => unsafe { min_d2_avx(xs, ys, zs, points, scale, stop) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            Eq11Kernel::LanesAvx => unsafe { min_d2_lanes_avx(xs, ys, zs, points, scale, stop) },
+            #[cfg(target_arch = "x86_64")]
+            Eq11Kernel::Sse2 => {
+                min_d2_segments(points, scale, stop, |s| seg_min_d2_sse2(xs, ys, zs, s))
             }
+            Eq11Kernel::Scalar => {
+                min_d2_segments(points, scale, stop, |s| seg_min_d2_scalar(xs, ys, zs, s))
+            }
+            Eq11Kernel::Lanes => {
+                min_d2_segments(points, scale, stop, |s| seg_min_d2_lanes(xs, ys, zs, s))
+            }
+            Eq11Kernel::Wide => {
+                min_d2_segments(points, scale, stop, |s| seg_min_d2_wide(xs, ys, zs, s))
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => min_d2_segments(points, scale, stop, |s| seg_min_d2_scalar(xs, ys, zs, s)),
         }
-        m
+    }
+
+    /// The same clearance with another eq. 11 kernel (A/B measurement only).
+    ///
+    /// # Panics
+    /// If the kernel needs AVX and the CPU has none.
+    #[doc(hidden)]
+    pub fn with_eq11_kernel(mut self, kernel: Eq11Kernel) -> Clearance {
+        if matches!(kernel, Eq11Kernel::Avx | Eq11Kernel::LanesAvx) {
+            assert!(cpu_has_avx(), "kernel {kernel:?} needs AVX");
+        }
+        self.kernel = kernel;
+        self
     }
 
     /// Centres model (eq. 11): smallest distance from any obstacle centre to any of the 7
@@ -710,6 +853,7 @@ impl Clearance {
 mod tests {
     use super::*;
     use crate::kinematics::PAPER_BETA0_DEG;
+    use std::f64::consts::PI;
 
     /// The AVX, SSE2 and portable kernels give the same bits.
     #[test]
@@ -718,7 +862,7 @@ mod tests {
         let arm = s.arm();
         let with_avx = Clearance::from_scenario(&s);
         let mut without = with_avx.clone();
-        without.avx = false;
+        without.kernel = Eq11Kernel::Sse2;
         let b0 = PAPER_BETA0_DEG.map(f64::to_radians);
         for k in 0..300 {
             let mut q = b0;
@@ -746,6 +890,65 @@ mod tests {
         let p = [Vector3::new(0.0, 100.0, 200.0); 8];
         assert!((with_avx.clearance_cells(&p) - 1.0).abs() < 1e-12);
         assert_eq!(with_avx.clearance_cells(&p), without.clearance_cells(&p));
+    }
+
+    /// Random worlds (0..=41 obstacle cells, some `centre` boxes) and random poses: every
+    /// eq. 11 kernel gives the bits of the hand-written AVX (or SSE2) kernel.
+    #[test]
+    fn kernels_agree_bit_for_bit_on_random_inputs() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let arm = Scenario::builtin("paper_simple").unwrap().arm();
+        let reference = if cpu_has_avx() {
+            Eq11Kernel::Avx
+        } else {
+            Eq11Kernel::Sse2
+        };
+        let mut kernels = vec![
+            Eq11Kernel::Sse2,
+            Eq11Kernel::Scalar,
+            Eq11Kernel::Lanes,
+            Eq11Kernel::Wide,
+        ];
+        if cpu_has_avx() {
+            kernels.push(Eq11Kernel::LanesAvx);
+        }
+        let (mut compared, mut clear) = (0, 0);
+        for world in 0..60 {
+            let n = world % 42;
+            let cells: Vec<Cell> = (0..n)
+                .map(|_| std::array::from_fn(|_| rng.random_range(-8..=8)))
+                .collect();
+            let boxes: Vec<ObstacleBox> = (0..world % 3)
+                .map(|_| {
+                    let lo: [f64; 3] = std::array::from_fn(|_| rng.random_range(-800.0..700.0));
+                    ObstacleBox {
+                        min_mm: lo,
+                        max_mm: lo.map(|v| v + rng.random_range(1.0..200.0)),
+                        distance_to: DistanceTo::Centre,
+                    }
+                })
+                .collect();
+            let cell_mm = rng.random_range(20.0..150.0);
+            let base = Clearance::new(&cells, cell_mm, ClearanceModel::Centres, 0.76)
+                .with_boxes(&boxes)
+                .with_eq11_kernel(reference);
+            for _ in 0..50 {
+                let q: Joints = std::array::from_fn(|_| rng.random_range(-PI..PI));
+                let p = arm.points_mm(&q);
+                let want = base.clearance_cells(&p);
+                clear += usize::from(base.pose_is_clear(&p));
+                for &k in &kernels {
+                    let c = base.clone().with_eq11_kernel(k);
+                    assert_eq!(c.clearance_cells(&p).to_bits(), want.to_bits(), "{k:?}");
+                    assert_eq!(c.pose_is_clear(&p), base.pose_is_clear(&p), "{k:?}");
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared >= 60 * 50 * 4);
+        // Both answers occur, so the early exit of `pose_is_clear` is exercised too.
+        assert!(clear > 100 && clear < 2900, "{clear} of 3000 poses clear");
     }
 
     #[test]
