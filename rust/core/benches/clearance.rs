@@ -2,15 +2,12 @@
 //! (centres and capsules models), a joint-space motion check of 50 steps, Algorithm 1 on a
 //! 10-cell route, and the static checks at the target.
 //!
-//! `eq11_kernels/*` runs the same poses through each eq. 11 kernel (docs/PERFORMANCE.md,
-//! "Eq. 11 kernels").
-//!
 //! Run with `cargo bench -p sixaxis-core --bench clearance`.
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use sixaxis_core::clearance::{Clearance, Eq11Kernel};
+use sixaxis_core::clearance::Clearance;
 use sixaxis_core::kinematics::PAPER_BETA0_DEG;
 use sixaxis_core::planner::PosePlanner;
 use sixaxis_core::scenario::{Cell, ClearanceModel, Scenario};
@@ -84,79 +81,5 @@ fn bench_planner(c: &mut Criterion) {
     g.finish();
 }
 
-/// 64 poses spread over joint space (a fixed integer recipe, no RNG), as points in mm.
-fn spread_poses(s: &Scenario) -> Vec<sixaxis_core::kinematics::ArmPoints> {
-    let arm = s.arm();
-    let b0 = PAPER_BETA0_DEG.map(f64::to_radians);
-    (0..64)
-        .map(|k| {
-            let mut q = b0;
-            for (i, x) in q.iter_mut().enumerate() {
-                *x += ((k * 7 + i * 5) % 29) as f64 * 0.2 - 2.8;
-            }
-            arm.points_mm(&q)
-        })
-        .collect()
-}
-
-/// Each eq. 11 kernel on the same 64 poses: the paper's 19 obstacles, and 200 obstacles
-/// (the paper's plus 181 cells of a fixed pattern) for the throughput of the inner loop.
-fn bench_eq11_kernels(c: &mut Criterion) {
-    let s = Scenario::builtin("paper_simple").unwrap();
-    let poses = spread_poses(&s);
-    let mut many: Vec<Cell> = s.obstacles.clone();
-    let mut k = 0i32;
-    while many.len() < 200 {
-        many.push([k % 13 - 6, (k / 13) % 13 - 6, (k * 5) % 9 - 1]);
-        k += 1;
-    }
-    let worlds = [
-        ("19", Clearance::from_scenario(&s)),
-        (
-            "200",
-            Clearance::new(
-                &many,
-                s.cell_mm,
-                ClearanceModel::Centres,
-                s.arm_safe_distance,
-            ),
-        ),
-    ];
-    let mut kernels = vec![
-        Eq11Kernel::Sse2,
-        Eq11Kernel::Scalar,
-        Eq11Kernel::Lanes,
-        Eq11Kernel::Wide,
-    ];
-    if std::arch::is_x86_feature_detected!("avx") {
-        kernels.insert(0, Eq11Kernel::Avx);
-        kernels.push(Eq11Kernel::LanesAvx);
-    }
-    let mut g = c.benchmark_group("eq11_kernels");
-    for (name, world) in &worlds {
-        let want: Vec<u64> = poses
-            .iter()
-            .map(|p| world.clearance_cells(p).to_bits())
-            .collect();
-        for &kernel in &kernels {
-            let cl = world.clone().with_eq11_kernel(kernel);
-            let got: Vec<u64> = poses
-                .iter()
-                .map(|p| cl.clearance_cells(p).to_bits())
-                .collect();
-            assert_eq!(got, want, "{kernel:?}");
-            g.bench_function(format!("{kernel:?}/{name}_obstacles_64_poses"), |b| {
-                b.iter(|| {
-                    black_box(&poses)
-                        .iter()
-                        .map(|p| cl.clearance_cells(p))
-                        .sum::<f64>()
-                })
-            });
-        }
-    }
-    g.finish();
-}
-
-criterion_group!(benches, bench_clearance, bench_planner, bench_eq11_kernels);
+criterion_group!(benches, bench_clearance, bench_planner);
 criterion_main!(benches);
