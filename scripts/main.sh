@@ -14,5 +14,7 @@ for s in paper_simple paper_complex replan_clutter; do
 done
 for r in 30 10; do
   python -m sixaxis_avoid.verify --table --link-radius-mm "$r" --json "docs/figures/verify_table_${r}mm.json" \
-    | tee /dev/stderr | python scripts/docsections.py docs/INTEROP.md "verify-${r}mm"
+    | bash scripts/splice_shown.sh docs/INTEROP.md "verify-${r}mm"
 done
+# README.md shows copies of generated sections (the tables above): refresh them.
+python scripts/docsections.py --sync README.md

@@ -9,6 +9,8 @@ echo "== cargo fmt";    cargo fmt --all -- --check
 echo "== cargo clippy"; cargo clippy --workspace --all-targets --quiet -- -D warnings
 echo "== cargo doc";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet -p sixaxis-core -p sixaxis-cli
 echo "== ruff";         ruff check python tests scripts && ruff format --check python tests scripts
+# The hand-written stub python/sixaxis_avoid/_core.pyi against the built extension.
+echo "== stubtest";     python -m mypy.stubtest sixaxis_avoid._core
 echo "== cargo test";   cargo test --workspace --release
 # Slow learning runs (marker `slow`) are left out here; scripts/test_slow.sh runs them.
 echo "== pytest";       python -m pytest tests -q -m "not slow"

@@ -113,8 +113,8 @@ def test_poses_reproduce_path_cells(which, request):
     arm = sa.Arm.from_scenario(
         sa.Scenario("paper_simple" if which == "simple_plan" else "replan_clutter")
     )
-    # The start pose is the scenario's beta_0 (Table 1, printed to 4 decimals): the SPEC
-    # puts its terminal within 0.1 mm of the start cell.
+    # The start pose is the scenario's beta_0 (Table 1, printed to 4 decimals): its terminal
+    # lies within 0.1 mm of the start cell (docs/SCENARIOS.md "Units and the arm").
     start_pos, _ = arm.fk(r.poses_rad[0])
     np.testing.assert_allclose(start_pos, np.array(r.path[0]) * r.cell_mm, atol=0.1)
     for cell, q, rpy in zip(r.path[1:], r.poses_rad[1:], r.orientations_rpy_deg[1:]):

@@ -57,12 +57,13 @@ BAD = [
     (
         {"episodes": 0},
         ["--episodes", "0"],
-        "invalid argument `episodes` = 0: must be an integer in 1..=4294967295",
+        'invalid argument `episodes` = 0: must be an integer in 1..=4294967295 or "auto"',
     ),
     (
         {"episodes": 2**32},
         ["--episodes", str(2**32)],
-        "invalid argument `episodes` = 4294967296: must be an integer in 1..=4294967295",
+        "invalid argument `episodes` = 4294967296: must be an integer in 1..=4294967295"
+        ' or "auto"',
     ),
     (
         {"max_steps_per_episode": 0},
@@ -95,8 +96,7 @@ BAD_PLAN_ONLY = [
     (
         {"learner": "dqn"},
         ["--learner", "dqn"],
-        "invalid argument `learner` = dqn: must be one of qlearning, bfs (or, from Python, a"
-        " callable)",
+        "invalid argument `learner` = dqn: must be one of qlearning, bfs",
     ),
 ]
 
@@ -119,11 +119,15 @@ def test_train_same_run(sixaxis_bin, kwargs, flags):
     assert proc.returncode == 0, proc.stderr
     c = json.loads(proc.stdout)
     p = sa.train(SCENARIO, **kwargs)
+    # One serialisation: the CLI's JSON is Python's to_dict(), field for field.
+    untimed_run = lambda d: {k: v for k, v in d.items() if k not in ("wall_time_s", "steps_per_second")}  # noqa: E731
+    assert untimed_run(c) == untimed_run(p.to_dict())
     assert (None if c["path"] is None else [tuple(x) for x in c["path"]]) == p.path
     for key in ("converged_episode", "length_converged_episode", "total_steps", "seed"):
         assert c[key] == getattr(p, key), key
     assert c["episodes"] == p.episodes
     assert c["steps_per_episode"] == p.steps_per_episode.tolist()
+    assert c["reached_per_episode"] == p.reached_per_episode.tolist()
 
 
 @pytest.mark.parametrize(("kwargs", "flags"), GOOD)
@@ -196,3 +200,48 @@ def test_plan_learner_flag_matches_keyword(sixaxis_bin):
     p = sa.plan(SCENARIO, learner="bfs", max_replans=3)
     assert untimed(json.loads(proc.stdout)) == untimed(p.to_dict())
     assert all(r["total_steps"] == 0 for r in p.rounds)
+
+
+def flag_of(option: dict, value) -> list[str]:
+    flag = "--" + option["key"].replace("_", "-")
+    if option["kind"] == "bool":
+        return [flag if value else "--no-" + flag[2:]]
+    return [flag, str(value)]
+
+
+@pytest.mark.parametrize("command", ["train", "plan"])
+def test_every_option_is_a_flag_and_a_keyword(sixaxis_bin, command):
+    """The options are declared once in the core: every one is a Python keyword and a CLI
+    flag, and giving its default explicitly changes nothing."""
+    help_text = subprocess.run(
+        [str(sixaxis_bin), command, "--help"], capture_output=True, text=True, timeout=60
+    ).stdout
+    options = sa.options(command)
+    assert {o["key"] for o in options} >= {"seed", "episodes", "assist", "alpha", "gamma"}
+    base = {"episodes": 200, "seed": 1}
+    fn = getattr(sa, command)
+    reference = fn(SCENARIO, **base).to_dict()
+    for o in options:
+        assert flag_of(o, True)[0] in help_text, o["key"]
+        assert o["doc"], o["key"]
+        if o["key"] in base or o["key"] == "episode_cap":
+            continue
+        got = fn(SCENARIO, **base, **{o["key"]: o["default"]}).to_dict()
+        assert got["seed"] == reference["seed"], o["key"]
+        assert got.get("path") == reference.get("path"), o["key"]
+        flags = ["--episodes", "200", "--seed", "1", *flag_of(o, o["default"])]
+        proc = cli(sixaxis_bin, command, flags)
+        assert proc.returncode in (0, 1), (o["key"], proc.stderr)
+        assert json.loads(proc.stdout).get("path") == reference.get("path"), o["key"]
+
+
+def test_options_describe_their_domains():
+    by_key = {o["key"]: o for o in sa.options("plan")}
+    assert by_key["alpha"]["min_exclusive"] is True and by_key["alpha"]["max"] == 1.0
+    assert by_key["initial_q"]["choices"] == ["zero", "distance"]
+    assert by_key["seed"]["field"] == "learning.seed"
+    assert by_key["max_replans"]["default"] == sa.Scenario(SCENARIO).to_dict()["planning"]["max_replans"]
+    with pytest.raises(TypeError, match="unexpected keyword argument 'sede'"):
+        sa.train(SCENARIO, sede=1)
+    with pytest.raises(sa.InvalidArgumentError, match="`alpha` = 0: must be a number in"):
+        sa.train(SCENARIO, alpha=0)

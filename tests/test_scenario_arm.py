@@ -104,7 +104,8 @@ def test_ik_by_rpy_and_errors():
 def test_pose_planner(paper_simple):
     planner = sa.PosePlanner(paper_simple)
     clearance, q, _ = planner.best_clearance_at(paper_simple.target)
-    # SPEC section 2: the best clearance at the target (0,3,0) is about 0.87 cell.
+    # docs/SCENARIOS.md "Interpretations taken": the best clearance at the target (0,3,0) is
+    # 0.87 cell.
     assert 0.85 < clearance < 0.88
     np.testing.assert_allclose(sa.Arm().fk(q)[0], [0.0, 300.0, 0.0], atol=1e-6)
     assert planner.cell_reachable(paper_simple.target)

@@ -2,19 +2,56 @@
 
 from collections.abc import Callable, Iterable, Sequence
 from os import PathLike
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import Self
+
+__all__ = [
+    "DEFAULT_SCENARIO",
+    "VECTOR_OBS_DIM",
+    "Arm",
+    "EnvCore",
+    "InternalError",
+    "InvalidArgumentError",
+    "PlanResult",
+    "PosePlanner",
+    "QTableMismatchError",
+    "Scenario",
+    "ScenarioError",
+    "ScenarioNotFoundError",
+    "ScenarioParseError",
+    "SixAxisError",
+    "SixAxisIOError",
+    "TrainResult",
+    "VecEnvCore",
+    "__version__",
+    "_raise_core_error",
+    "cells_reachable",
+    "clear_pose_at",
+    "expand_names",
+    "export_scenario",
+    "generate_scenario",
+    "greedy_path_of",
+    "load_q",
+    "options",
+    "machine",
+    "plan",
+    "shortest_path",
+    "train",
+    "unreachable_cells",
+    "write_atomic",
+]
 
 __version__: str
 DEFAULT_SCENARIO: str
 VECTOR_OBS_DIM: int
 
-Cell = tuple[int, int, int]
-CellLike = Sequence[int] | npt.NDArray[np.integer[Any]]
+_Cell = tuple[int, int, int]
+_CellLike = Sequence[int] | npt.NDArray[np.integer[Any]]
 # A Q-table, (num_states, 6): float64, or float32 for q_precision="f32".
-QArray = npt.NDArray[np.float64] | npt.NDArray[np.float32]
+_QArray = npt.NDArray[np.float64] | npt.NDArray[np.float32]
 
 # Exceptions (created at import; every one is a ValueError through SixAxisError).
 class SixAxisError(ValueError): ...
@@ -39,10 +76,11 @@ class QTableMismatchError(SixAxisError): ...
 class SixAxisIOError(OSError, SixAxisError): ...
 class InternalError(RuntimeError): ...
 
+@final
 class Scenario:
-    def __init__(
-        self, name_or_path: str | PathLike[str] | dict[str, Any] | Scenario | None = None
-    ) -> None: ...
+    def __new__(
+        cls, name_or_path: str | PathLike[str] | dict[str, Any] | Scenario | None = None
+    ) -> Self: ...
     @staticmethod
     def load(name_or_path: str | PathLike[str]) -> Scenario: ...
     @staticmethod
@@ -65,15 +103,15 @@ class Scenario:
     @property
     def cell_mm(self) -> float: ...
     @property
-    def bounds(self) -> tuple[Cell, Cell]: ...
+    def bounds(self) -> tuple[_Cell, _Cell]: ...
     @property
     def shape(self) -> list[int]: ...
     @property
-    def start(self) -> Cell: ...
+    def start(self) -> _Cell: ...
     @property
-    def target(self) -> Cell: ...
+    def target(self) -> _Cell: ...
     @property
-    def obstacles(self) -> list[Cell]: ...
+    def obstacles(self) -> list[_Cell]: ...
     @property
     def obstacle_boxes_mm(self) -> list[dict[str, Any]]: ...
     @property
@@ -88,15 +126,16 @@ class Scenario:
     def learning(self) -> dict[str, Any]: ...
     @property
     def beta0_deg(self) -> list[float]: ...
-    def __eq__(self, other: object) -> bool: ...
+    def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
 
-ScenarioLike = Scenario | str | PathLike[str] | dict[str, Any] | None
+_ScenarioLike = Scenario | str | PathLike[str] | dict[str, Any] | None
 
+@final
 class Arm:
-    def __init__(self, dh: Sequence[Sequence[float]] | None = None) -> None: ...
+    def __new__(cls, dh: Sequence[Sequence[float]] | None = None) -> Self: ...
     @staticmethod
-    def from_scenario(scenario: ScenarioLike) -> Arm: ...
+    def from_scenario(scenario: _ScenarioLike) -> Arm: ...
     @property
     def dh(self) -> list[tuple[float, float, float, float]]: ...
     def fk(
@@ -114,9 +153,10 @@ class Arm:
         rpy_deg: Sequence[float] | None = None,
     ) -> npt.NDArray[np.float64]: ...
 
+@final
 class TrainResult:
     @property
-    def path(self) -> list[Cell] | None: ...
+    def path(self) -> list[_Cell] | None: ...
     @property
     def path_array(self) -> npt.NDArray[np.int32]: ...
     @property
@@ -137,107 +177,122 @@ class TrainResult:
     def seed(self) -> int: ...
     @property
     def episodes(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]: ...
     @property
-    def q(self) -> QArray: ...
+    def q(self) -> _QArray: ...
     @property
     def q_precision(self) -> Literal["f64", "f32"]: ...
     @property
     def state_cells(self) -> npt.NDArray[np.int32]: ...
     @property
     def scenario(self) -> Scenario: ...
-    def state_of(self, cell: CellLike) -> int | None: ...
+    def state_of(self, c: _CellLike) -> int | None: ...
     def save_q(self, path: str | PathLike[str]) -> None: ...
 
 def train(
-    scenario: ScenarioLike = None,
+    scenario: _ScenarioLike = None,
     *,
-    episodes: int | Literal["auto"] | None = None,
-    episode_cap: int | None = None,
-    seed: int | None = None,
+    extra_obstacles: Iterable[_CellLike] | None = None,
+    initial_q: Literal["zero", "distance"] | _QArray | None = None,
+    progress: Callable[[int], object] | None = None,
+    # options:train >>>
     assist: bool | None = None,
+    episodes: int | Literal["auto"] | None = None,
+    seed: int | None = None,
     detour: bool | None = None,
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
-    extra_obstacles: Iterable[CellLike] | None = None,
-    initial_q: Literal["zero", "distance"] | QArray | None = None,
     q_precision: Literal["f64", "f32"] | None = None,
-    progress: Callable[[int], object] | None = None,
+    alpha: float | None = None,
+    gamma: float | None = None,
+    epsilon_start: float | None = None,
+    epsilon_decay_episodes: int | None = None,
+    episode_cap: int | None = None,
+    # <<< options:train
 ) -> TrainResult: ...
+def options(
+    function: Literal["train", "plan"] = "train", scenario: _ScenarioLike = None
+) -> list[dict[str, Any]]: ...
 def load_q(
     path: str | PathLike[str],
-    scenario: ScenarioLike = None,
+    scenario: _ScenarioLike = None,
     *,
-    extra_obstacles: Iterable[CellLike] | None = None,
-) -> QArray: ...
+    extra_obstacles: Iterable[_CellLike] | None = None,
+) -> _QArray: ...
 def greedy_path_of(
-    q: QArray,
-    scenario: ScenarioLike = None,
+    q: _QArray,
+    scenario: _ScenarioLike = None,
     *,
     max_steps: int | None = None,
-    extra_obstacles: Iterable[CellLike] | None = None,
-) -> list[Cell] | None: ...
+    extra_obstacles: Iterable[_CellLike] | None = None,
+) -> list[_Cell] | None: ...
 def shortest_path(
-    scenario: ScenarioLike = None, *, extra_obstacles: Iterable[CellLike] | None = None
-) -> list[Cell] | None: ...
-def unreachable_cells(scenario: ScenarioLike = None) -> list[Cell]: ...
-def clear_pose_at(scenario: ScenarioLike, cell_xyz: CellLike) -> npt.NDArray[np.float64] | None: ...
+    scenario: _ScenarioLike = None, *, extra_obstacles: Iterable[_CellLike] | None = None
+) -> list[_Cell] | None: ...
+def unreachable_cells(scenario: _ScenarioLike = None) -> list[_Cell]: ...
+def clear_pose_at(
+    scenario: _ScenarioLike, cell_xyz: _CellLike
+) -> npt.NDArray[np.float64] | None: ...
 def cells_reachable(
-    cells: Iterable[CellLike], scenario: ScenarioLike = None
+    cells: Iterable[_CellLike], scenario: _ScenarioLike = None
 ) -> npt.NDArray[np.bool_]: ...
 def _raise_core_error(kind: str) -> None: ...
 
+@final
 class PosePlanner:
-    def __init__(self, scenario: ScenarioLike = None, *, round: int = 0) -> None: ...
+    def __new__(cls, scenario: _ScenarioLike = None, *, round: int = 0) -> Self: ...
     @property
     def scenario(self) -> Scenario: ...
     @property
     def orientation_divisions(self) -> int: ...
-    def cell_reachable(self, cell_xyz: CellLike) -> bool: ...
+    def cell_reachable(self, cell_xyz: _CellLike) -> bool: ...
     def best_clearance_at(
-        self, cell_xyz: CellLike
+        self, cell_xyz: _CellLike
     ) -> tuple[float, npt.NDArray[np.float64], tuple[float, float, float]] | None: ...
     def plan_poses(
-        self, path: Iterable[CellLike], beta0_rad: Sequence[float] | None = None
+        self, path: Iterable[_CellLike], beta0_rad: Sequence[float] | None = None
     ) -> dict[str, Any]: ...
 
+@final
 class EnvCore:
-    def __init__(
-        self,
-        scenario: ScenarioLike = None,
+    def __new__(
+        cls,
+        scenario: _ScenarioLike = None,
         *,
         obs: str = "vector",
         assist: bool | None = None,
         reward_scale: float = 1.0,
         random_target: bool = False,
-        extra_obstacles: Iterable[CellLike] | None = None,
+        extra_obstacles: Iterable[_CellLike] | None = None,
         track_path: bool = False,
-    ) -> None: ...
+    ) -> Self: ...
     def seed(self, seed: int) -> None: ...
     def reset(self) -> tuple[Any, dict[str, Any]]: ...
     def step(self, action: int) -> tuple[Any, float, bool, dict[str, Any]]: ...
     def vector_observation(self) -> npt.NDArray[np.float32]: ...
-    def cell_of(self, state: int) -> Cell: ...
-    def state_of(self, cell: CellLike) -> int | None: ...
+    def cell_of(self, state: int) -> _Cell: ...
+    def state_of(self, c: _CellLike) -> int | None: ...
     scenario: Scenario
     num_states: int
     state: int
     steps: int
-    cell: Cell
-    target_cell: Cell
-    start_cell: Cell
-    obstacles: list[Cell]
-    extra_obstacles: list[Cell]
-    target_cells: list[Cell]
+    cell: _Cell
+    target_cell: _Cell
+    start_cell: _Cell
+    obstacles: list[_Cell]
+    extra_obstacles: list[_Cell]
+    target_cells: list[_Cell]
     blocked: npt.NDArray[np.bool_]
-    path: list[Cell]
+    path: list[_Cell]
     start_distance: float
     reward_scale: float
     assist: tuple[bool, bool]
 
+@final
 class VecEnvCore:
-    def __init__(
-        self,
-        scenario: ScenarioLike = None,
+    def __new__(
+        cls,
+        scenario: _ScenarioLike = None,
         *,
         num_envs: int,
         max_episode_steps: int,
@@ -245,8 +300,8 @@ class VecEnvCore:
         assist: bool | None = None,
         reward_scale: float = 1.0,
         random_target: bool = False,
-        extra_obstacles: Iterable[CellLike] | None = None,
-    ) -> None: ...
+        extra_obstacles: Iterable[_CellLike] | None = None,
+    ) -> Self: ...
     def seed(self, seeds: Sequence[int]) -> None: ...
     def reset(self, mask: npt.NDArray[np.bool_] | None = None) -> None: ...
     def step(self, actions: npt.NDArray[np.int64]) -> None: ...
@@ -264,11 +319,12 @@ class VecEnvCore:
     steps: npt.NDArray[np.uint32]
     target_cells: npt.NDArray[np.int32]
 
+@final
 class PlanResult:
     @property
     def success(self) -> bool: ...
     @property
-    def path(self) -> list[Cell]: ...
+    def path(self) -> list[_Cell]: ...
     @property
     def poses_rad(self) -> npt.NDArray[np.float64]: ...
     @property
@@ -276,7 +332,7 @@ class PlanResult:
     @property
     def replans(self) -> int: ...
     @property
-    def added_obstacles(self) -> list[Cell]: ...
+    def added_obstacles(self) -> list[_Cell]: ...
     @property
     def failure(self) -> str | None: ...
     @property
@@ -290,7 +346,7 @@ class PlanResult:
     @property
     def min_cube_distance_mm(self) -> float | None: ...
     @property
-    def obstacles(self) -> list[Cell]: ...
+    def obstacles(self) -> list[_Cell]: ...
     @property
     def obstacle_boxes_mm(self) -> list[dict[str, Any]]: ...
     @property
@@ -302,47 +358,53 @@ class PlanResult:
     @property
     def clearance_model(self) -> dict[str, Any]: ...
     @property
-    def start(self) -> Cell: ...
+    def start(self) -> _Cell: ...
     @property
-    def target(self) -> Cell: ...
+    def target(self) -> _Cell: ...
     def to_dict(self) -> dict[str, Any]: ...
     def to_json(self) -> str: ...
 
-class PathLearnerObject(Protocol):
+class _PathLearnerObject(Protocol):
     def learn_path(
         self, scenario: Scenario, seed: int
-    ) -> Sequence[CellLike] | dict[str, Any] | None: ...
+    ) -> Sequence[_CellLike] | dict[str, Any] | None: ...
 
-PathLearner = (
+_PathLearner = (
     Literal["qlearning", "bfs"]
-    | Callable[[Scenario, int], Sequence[CellLike] | dict[str, Any] | None]
-    | PathLearnerObject
+    | Callable[[Scenario, int], Sequence[_CellLike] | dict[str, Any] | None]
+    | _PathLearnerObject
 )
 
 def plan(
-    scenario: ScenarioLike = None,
+    scenario: _ScenarioLike = None,
     *,
-    seed: int | None = None,
-    episodes: int | Literal["auto"] | None = None,
-    episode_cap: int | None = None,
+    learner: _PathLearner | None = None,
+    # options:plan >>>
     assist: bool | None = None,
+    episodes: int | Literal["auto"] | None = None,
+    seed: int | None = None,
     detour: bool | None = None,
     distance: bool | None = None,
     max_steps_per_episode: int | None = None,
     initial_q: Literal["zero", "distance"] | None = None,
     q_precision: Literal["f64", "f32"] | None = None,
+    alpha: float | None = None,
+    gamma: float | None = None,
+    epsilon_start: float | None = None,
+    epsilon_decay_episodes: int | None = None,
+    episode_cap: int | None = None,
     max_replans: int | None = None,
-    learner: PathLearner | None = None,
+    # <<< options:plan
 ) -> PlanResult: ...
 def export_scenario(
-    scenario: ScenarioLike = None,
+    scenario: _ScenarioLike = None,
     format: str = "mjcf",
     path: str | PathLike[str] | None = None,
 ) -> str: ...
 def generate_scenario(
     seed: int,
     density: float = 0.08,
-    bounds: tuple[CellLike, CellLike] | dict[str, CellLike] | None = None,
+    bounds: tuple[_CellLike, _CellLike] | dict[str, _CellLike] | None = None,
     min_start_target_distance: float = 4.0,
     require_arm_reachable: bool = True,
     template: str = "paper_simple",

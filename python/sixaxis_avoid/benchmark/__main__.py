@@ -17,42 +17,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import shlex
 import sys
 from pathlib import Path
 from typing import Any
 
 from sixaxis_avoid.benchmark import learners as lmod
 from sixaxis_avoid.benchmark import runner
+from sixaxis_avoid.benchmark.cli import command_line, parse_seeds, split
 from sixaxis_avoid.benchmark.tasks import SuiteError, available, load_suite
 
 DEFAULT_LEARNERS = "q_assist,q_plain,bfs,dqn,qrdqn,ppo,a2c"
-
-
-def command_line(argv: list[str]) -> str:
-    return "python -m sixaxis_avoid.benchmark " + " ".join(shlex.quote(a) for a in argv)
-
-
-def parse_seeds(text: str | None) -> list[int] | None:
-    """``--seeds``: a count N (seeds 0..N-1) or a comma list; one seed k is ``k,``."""
-    if text is None:
-        return None
-    text = text.strip()
-    parts = split(text)
-    try:
-        seeds = [int(s) for s in parts]
-    except ValueError:
-        raise SystemExit(f"--seeds: {text!r}: not a count or a comma list of integers") from None
-    if "," not in text and seeds:
-        seeds = list(range(seeds[0]))
-    if not seeds or any(s < 0 for s in seeds):
-        hint = " (a count; seed 0 alone is --seeds 0,)" if text == "0" else ""
-        raise SystemExit(f"--seeds: {text!r}: need at least one seed, all >= 0{hint}")
-    return seeds
-
-
-def split(text: str) -> list[str]:
-    return [x.strip() for x in text.split(",") if x.strip()]
 
 
 def parse_sets(items: list[str]) -> dict[str, dict[str, Any]]:

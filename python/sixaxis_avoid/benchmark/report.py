@@ -523,6 +523,8 @@ def markdown(
         "reaches the target, else 0), averaged over the task's evaluation targets. Intervals: 95% "
         f"stratified bootstrap over runs ({a['reps']} replications, seeded).",
         "",
+        # A marked section (scripts/docsections.py): README.md shows a copy of it.
+        "<!-- benchmark-aggregate:begin -->",
         "| learner | IQM | mean | optimality gap |",
         "|---|---|---|---|",
         *[
@@ -530,6 +532,7 @@ def markdown(
             f"{metric(lr, 'optimality_gap')} |"
             for lr in learners
         ],
+        "<!-- benchmark-aggregate:end -->",
         "",
         f"![IQM, mean and optimality gap]({rel['iqm']})",
         "",

@@ -21,6 +21,7 @@ import numpy as np
 
 from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import runner
+from sixaxis_avoid.benchmark.cli import command_line, parse_seeds, split
 from sixaxis_avoid.benchmark.stats import curve_on
 from sixaxis_avoid.benchmark.tasks import load_suite
 
@@ -34,8 +35,6 @@ def curve_area(record: dict[str, Any]) -> float:
 
 def cmd_tune(args: argparse.Namespace, argv: list[str]) -> int:
     import optuna
-
-    from sixaxis_avoid.benchmark.__main__ import command_line, parse_seeds, split
 
     suite = load_suite(args.suite)
     suite.check_disjoint()

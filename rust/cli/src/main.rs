@@ -13,6 +13,7 @@ use serde_json::{json, Value};
 use sixaxis_core::kinematics::{rotation_from_rpy_deg, Arm};
 use sixaxis_core::{Error, Scenario, TerminalPose};
 
+mod flags;
 mod interrupt;
 mod learn;
 mod list;
@@ -292,7 +293,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 &out,
             )
         }
-        Command::Train { args, out } => emit(&learn::run_train(&args)?, &out),
+        Command::Train { args, out } => emit(
+            &serde_json::to_value(learn::run_train(&args)?).expect("a report serialises"),
+            &out,
+        ),
         Command::Plan { args, out } => {
             let r = learn::run_plan(&args)?;
             emit(

@@ -1,4 +1,5 @@
-//! The `sixaxis` binary as a user runs it: JSON contracts of SPEC section 3, exit codes,
+//! The `sixaxis` binary as a user runs it: JSON contracts and exit codes
+//! (docs/SCENARIOS.md "JSON outputs of the CLI"),
 //! errors on stderr without panics, atomic `--out`.
 
 use std::process::{Command, Output};

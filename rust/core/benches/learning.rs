@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sixaxis_core::grid::{Assist, GridWorld};
-use sixaxis_core::qlearning::{train, TrainOptions};
+use sixaxis_core::qlearning::{train, Learning};
 use sixaxis_core::Scenario;
 
 /// CPU time this thread has run, if the OS tells (Linux: first field of schedstat, ns).
@@ -32,8 +32,8 @@ fn bench_train(c: &mut Criterion) {
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(6));
     for (label, assist) in [("assist", Assist::on()), ("no_assist", Assist::off())] {
-        let mut opts = TrainOptions::from_scenario(&scenario);
-        opts.assist = assist;
+        let mut opts = Learning::from_scenario(&scenario);
+        opts.set_assist(assist);
         opts.seed = 0;
         let probe = train(&world, &opts, None, None).expect("train");
         println!(

@@ -16,7 +16,7 @@
 //! assert_eq!((t.reward, t.collided), (-15000.0, false));
 //! ```
 //!
-//! # Semantics (SPEC section 2)
+//! # Semantics (docs/SCENARIOS.md "The grid world: states, actions, collisions, rewards")
 //!
 //! - **States** are the cells inside `bounds` (inclusive box), numbered row-major over
 //!   (x, y, z) with z fastest: `s = ((x - min_x) * ny + (y - min_y)) * nz + (z - min_z)`.
@@ -53,9 +53,8 @@
 use std::collections::VecDeque;
 use std::sync::Arc;
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::{Error, Result};
+pub use crate::scenario::Assist;
 use crate::scenario::{Bounds, Cell, Rewards, Scenario};
 
 /// The six actions as unit moves, in the paper's order (eq. 3): `+x -x +y -y +z -z`.
@@ -75,42 +74,6 @@ pub const NUM_ACTIONS: usize = 6;
 #[inline]
 pub fn opposite(action: usize) -> usize {
     action ^ 1
-}
-
-/// Which assisted-learning strategies shape the reward.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Assist {
-    /// Detour encouraging, eq. 9.
-    pub detour: bool,
-    /// Distance assistance, eq. 10.
-    pub distance: bool,
-}
-
-impl Assist {
-    /// Both strategies on ("with assisted learning").
-    pub fn on() -> Self {
-        Assist {
-            detour: true,
-            distance: true,
-        }
-    }
-
-    /// Both off: eq. 5 alone ("without assisted learning").
-    pub fn off() -> Self {
-        Assist {
-            detour: false,
-            distance: false,
-        }
-    }
-
-    /// The scenario's `learning.assist_detour` / `learning.assist_distance`.
-    pub fn from_scenario(s: &Scenario) -> Self {
-        Assist {
-            detour: s.learning.assist_detour,
-            distance: s.learning.assist_distance,
-        }
-    }
 }
 
 /// The outcome of one step.

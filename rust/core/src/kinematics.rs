@@ -5,7 +5,7 @@
 //!   same family.
 //! - [`Arm::fk`] — forward kinematics: joint angles (radians) to the terminal pose (mm).
 //! - [`Arm::points_mm`] — the arm's body as the 8-point polyline
-//!   base → O1 → O2 → O3 → Aux → O4 → O5 → O6 (SPEC section 1), in mm.
+//!   base → O1 → O2 → O3 → Aux → O4 → O5 → O6 (docs/SCENARIOS.md "Units and the arm"), in mm.
 //! - `Arm::ik` (module `ik`) — closed-form inverse kinematics, every solution.
 //! - [`orientation_grid`] — the paper's terminal orientations (eq. 12), duplicates removed.
 //!

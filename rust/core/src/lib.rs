@@ -52,6 +52,7 @@ pub mod ik;
 pub mod io;
 pub mod kinematics;
 pub mod names;
+pub mod options;
 pub mod planner;
 pub mod qlearning;
 pub mod regrid;
@@ -65,7 +66,7 @@ pub use grid::{Assist, GridWorld, Transition};
 pub use ik::{check_closed_form_family, IkSolutions};
 pub use kinematics::{Arm, Joints, TerminalPose};
 pub use planner::{PosePlan, PosePlanner, PosePoint};
-pub use qlearning::{greedy_path, train, QTable, TrainOptions, TrainResult};
+pub use qlearning::{greedy_path, train, Learning, QTable, TrainReport, TrainResult};
 pub use replanning::{
     plan, BfsLearner, LearnedPath, PathLearner, PlanOptions, PlanResult, QLearner,
 };

@@ -1,7 +1,7 @@
 //! Tabular Q-learning of the terminal's path (eqs. 6-8), and Q-table files.
 //!
 //! Entry points:
-//! - [`train`] — learn a [`QTable`] on a [`GridWorld`] with [`TrainOptions`]; returns the
+//! - [`train`] — learn a [`QTable`] on a [`GridWorld`] with [`Learning`]; returns the
 //!   learned path, per-episode statistics and the converged episode ([`TrainResult`]).
 //! - [`greedy_path`] — the learned path (`place`, eq. 8) of a Q-table.
 //! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
@@ -11,11 +11,11 @@
 //!
 //! ```
 //! use sixaxis_core::grid::GridWorld;
-//! use sixaxis_core::qlearning::{train, TrainOptions};
+//! use sixaxis_core::qlearning::{train, Learning};
 //! use sixaxis_core::Scenario;
 //! let s = Scenario::builtin("paper_simple").unwrap();
 //! let world = GridWorld::new(&s).unwrap();
-//! let mut opts = TrainOptions::from_scenario(&s); // the paper's 10,000 episodes ...
+//! let mut opts = Learning::from_scenario(&s); // the paper's 10,000 episodes ...
 //! opts.episodes = 200; // ... fewer here
 //! let r = train(&world, &opts, None, None).unwrap();
 //! assert_eq!(r.steps_per_episode.len(), 200);
@@ -125,107 +125,15 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::grid::{Assist, Fnv, GridWorld, Transition, NUM_ACTIONS};
-use crate::scenario::{Bounds, Cell, InitialQ, QPrecision, Scenario};
+use crate::grid::{Fnv, GridWorld, Transition, NUM_ACTIONS};
+use crate::scenario::{Assist, Bounds, Cell, InitialQ, QPrecision, Scenario};
 
-/// Everything [`train`] needs besides the world.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TrainOptions {
-    /// Number of episodes (eta_set).
-    pub episodes: u32,
-    /// Seed of the run's `ChaCha8Rng`.
-    pub seed: u64,
-    /// Reward shaping: eq. 9 and/or eq. 10.
-    pub assist: Assist,
-    /// Learning rate alpha, (0, 1].
-    pub alpha: f64,
-    /// Discount factor gamma, [0, 1].
-    pub gamma: f64,
-    /// epsilon at episode 0, [0, 1].
-    pub epsilon_start: f64,
-    /// M: epsilon falls linearly to 0 at episode M (counted from 0).
-    pub epsilon_decay_episodes: u32,
-    /// Step cap of an episode, and of the greedy rollout.
-    pub max_steps_per_episode: u32,
-    /// Train until the greedy path settles, with `episodes` as the cap (see the module docs).
-    #[serde(default)]
-    pub episodes_auto: bool,
-    /// How the Q-table starts when [`train`] is given none: zeros (the paper) or the
-    /// distance bound of [`distance_bound_table`].
-    #[serde(default)]
-    pub initial_q: InitialQ,
-    /// The type the Q-values are stored in: f64 (the default) or f32 (half the memory;
-    /// updates computed in f64, stored rounded).
-    #[serde(default)]
-    pub q_precision: QPrecision,
-}
+/// The options of [`train`] are the scenario's `learning` section, [`Learning`] (declared
+/// once in [`crate::scenario`]; requests override it through [`crate::request`]).
+pub use crate::scenario::{Learning, AUTO_EPISODE_CAP};
 
 /// Shortest settle horizon of `episodes_auto`, episodes.
 pub const AUTO_MIN_HORIZON: u32 = 100;
-
-/// Default episode cap of `episodes_auto` (`--episodes auto`).
-pub const AUTO_EPISODE_CAP: u32 = 1_000_000;
-
-impl TrainOptions {
-    /// The scenario's `learning` section.
-    pub fn from_scenario(s: &Scenario) -> Self {
-        let l = &s.learning;
-        TrainOptions {
-            episodes: l.episodes,
-            seed: l.seed,
-            assist: Assist::from_scenario(s),
-            alpha: l.alpha,
-            gamma: l.gamma,
-            epsilon_start: l.epsilon_start,
-            epsilon_decay_episodes: l.epsilon_decay_episodes,
-            max_steps_per_episode: l.max_steps_per_episode,
-            episodes_auto: false,
-            initial_q: l.initial_q,
-            q_precision: l.q_precision,
-        }
-    }
-
-    /// `--episodes auto`: train until the greedy path settles, under [`AUTO_EPISODE_CAP`].
-    pub fn auto(mut self) -> Self {
-        self.episodes_auto = true;
-        self.episodes = AUTO_EPISODE_CAP;
-        self
-    }
-
-    /// Check the ranges; the error names the field.
-    pub fn validate(&self) -> Result<()> {
-        if self.episodes == 0 {
-            return Err(Error::argument("episodes", 0, "must be > 0"));
-        }
-        if self.max_steps_per_episode == 0 {
-            return Err(Error::argument("max_steps_per_episode", 0, "must be > 0"));
-        }
-        if !(self.alpha > 0.0 && self.alpha <= 1.0) {
-            return Err(Error::argument("alpha", self.alpha, "must be in (0, 1]"));
-        }
-        if !(0.0..=1.0).contains(&self.gamma) {
-            return Err(Error::argument("gamma", self.gamma, "must be in [0, 1]"));
-        }
-        if !(0.0..=1.0).contains(&self.epsilon_start) {
-            return Err(Error::argument(
-                "epsilon_start",
-                self.epsilon_start,
-                "must be in [0, 1]",
-            ));
-        }
-        Ok(())
-    }
-
-    /// Exploration rate of episode `episode` (counted from 0), eq. 7.
-    pub fn epsilon(&self, episode: u32) -> f64 {
-        let m = self.epsilon_decay_episodes;
-        if m == 0 || episode > m {
-            0.0
-        } else {
-            self.epsilon_start * (1.0 - episode as f64 / m as f64)
-        }
-    }
-}
 
 /// Q-values: `num_states` rows of six actions, stored as f64 (the default) or f32
 /// ([`QPrecision`]); every accessor reads and writes them as f64.
@@ -719,7 +627,7 @@ pub fn q_update(
 /// plus eq. 10 when on) and `V0(n)` bounds from above the return of every collision-free
 /// path from `n` to the target ([`distance_bound_values`]). The target's row is 0. The
 /// table has `opts.q_precision` (values computed in f64, then stored).
-pub fn distance_bound_table(world: &GridWorld, opts: &TrainOptions) -> QTable {
+pub fn distance_bound_table(world: &GridWorld, opts: &Learning) -> QTable {
     let rows = match opts.q_precision {
         QPrecision::F64 => Rows::F64(distance_bound_rows(world, opts)),
         QPrecision::F32 => Rows::F32(distance_bound_rows(world, opts)),
@@ -727,10 +635,10 @@ pub fn distance_bound_table(world: &GridWorld, opts: &TrainOptions) -> QTable {
     QTable { rows }
 }
 
-fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &TrainOptions) -> Vec<[V; NUM_ACTIONS]> {
+fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &Learning) -> Vec<[V; NUM_ACTIONS]> {
     let v0 = distance_bound_values(world, opts);
     let rw = world.rewards();
-    let r_e = if opts.assist.distance {
+    let r_e = if opts.assist_distance {
         rw.distance_reward
     } else {
         0.0
@@ -765,10 +673,10 @@ fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &TrainOptions) -> Vec
 /// so `V0(n) = sum_{j=1}^{k-1} gamma^(j-1) (-p + r_e (d_o - L_j)) + gamma^(k-1) (r + r_e d_o)`.
 /// While every step's reward is negative (`r_e d_o < p`), a longer path only lowers this
 /// sum, so the bound holds for paths of every length. Exact on a straight free path.
-pub fn distance_bound_values(world: &GridWorld, opts: &TrainOptions) -> Vec<f64> {
+pub fn distance_bound_values(world: &GridWorld, opts: &Learning) -> Vec<f64> {
     let rw = world.rewards();
     let (p, r, gamma) = (rw.step_penalty, rw.target_reward, opts.gamma);
-    let r_e = if opts.assist.distance {
+    let r_e = if opts.assist_distance {
         rw.distance_reward
     } else {
         0.0
@@ -818,6 +726,101 @@ pub struct TrainResult {
     /// The learned Q-table.
     #[serde(skip)]
     pub q: QTable,
+}
+
+/// What a training run reports: the options it ran with and what it learned, the one
+/// serialisation of a run (the JSON of `sixaxis train` and Python's `TrainResult.to_dict()`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrainReport {
+    /// The scenario's name.
+    pub scenario: String,
+    /// Seed of the run's generator.
+    pub seed: u64,
+    /// Episodes asked for (the cap with `episodes_auto`).
+    pub episodes: u32,
+    /// Whether the run stopped when the greedy path settled (`episodes = "auto"`).
+    pub episodes_auto: bool,
+    /// How the Q-table started.
+    pub initial_q: InitialQ,
+    /// The type of the Q-values.
+    pub q_precision: QPrecision,
+    /// Size of the Q-table's values, bytes.
+    pub q_table_bytes: usize,
+    /// Episodes run.
+    pub episodes_run: usize,
+    /// Environment steps up to and including the converged episode; `None` without one.
+    pub steps_to_converged: Option<u64>,
+    /// The assisted strategies of the run (eqs. 9 and 10).
+    pub assist: Assist,
+    /// Whether the learned path reaches the target.
+    pub reached: bool,
+    /// The learned path, start..=target (cells); `None` if it fails.
+    pub path: Option<Vec<Cell>>,
+    /// Moves of the learned path.
+    pub path_length: Option<usize>,
+    /// Moves of the shortest (BFS) path; `None` if the target is unreachable.
+    pub shortest_path_length: Option<usize>,
+    /// See [`TrainResult::converged_episode`].
+    pub converged_episode: Option<u32>,
+    /// See [`TrainResult::length_converged_episode`].
+    pub length_converged_episode: Option<u32>,
+    /// Environment steps over all episodes.
+    pub total_steps: u64,
+    /// Wall time of the run, s.
+    pub wall_time_s: f64,
+    /// `total_steps / wall_time_s`, environment steps per second (0 for no time).
+    pub steps_per_second: f64,
+    /// Steps of each episode (left out of a report without curves).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps_per_episode: Option<Vec<u32>>,
+    /// Whether each episode reached the target (left out of a report without curves).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reached_per_episode: Option<Vec<bool>>,
+}
+
+impl TrainReport {
+    /// The report of run `r` with options `opts` on `world` (of scenario `s`); `curves`
+    /// keeps the per-episode figures.
+    pub fn new(
+        s: &Scenario,
+        world: &GridWorld,
+        opts: &Learning,
+        r: &TrainResult,
+        curves: bool,
+    ) -> Self {
+        TrainReport {
+            scenario: s.name.clone(),
+            seed: opts.seed,
+            episodes: opts.episodes,
+            episodes_auto: opts.episodes_auto,
+            initial_q: opts.initial_q,
+            q_precision: opts.q_precision,
+            q_table_bytes: r.q.num_states() * r.q.bytes_per_state(),
+            episodes_run: r.steps_per_episode.len(),
+            steps_to_converged: r.converged_episode.map(|e| {
+                r.steps_per_episode[..=e as usize]
+                    .iter()
+                    .map(|&k| k as u64)
+                    .sum()
+            }),
+            assist: opts.assist(),
+            reached: r.path.is_some(),
+            path: r.path.clone(),
+            path_length: r.path.as_ref().map(|p| p.len() - 1),
+            shortest_path_length: world.shortest_path().map(|p| p.len() - 1),
+            converged_episode: r.converged_episode,
+            length_converged_episode: r.length_converged_episode,
+            total_steps: r.total_steps,
+            wall_time_s: r.wall_time_s,
+            steps_per_second: if r.wall_time_s > 0.0 {
+                r.total_steps as f64 / r.wall_time_s
+            } else {
+                0.0
+            },
+            steps_per_episode: curves.then(|| r.steps_per_episode.clone()),
+            reached_per_episode: curves.then(|| r.reached_per_episode.clone()),
+        }
+    }
 }
 
 /// Greedy rollout from the start (ties: lowest action index), writing the visited states
@@ -880,7 +883,7 @@ pub fn greedy_path(world: &GridWorld, q: &QTable, max_steps: u32) -> Option<Vec<
 /// `wall_time_s`).
 pub fn train(
     world: &GridWorld,
-    opts: &TrainOptions,
+    opts: &Learning,
     initial_q: Option<QTable>,
     progress: Option<&dyn Fn(u32)>,
 ) -> Result<TrainResult> {
@@ -891,7 +894,7 @@ pub fn train(
 /// episode (the reference for the incremental bookkeeping, for tests).
 fn train_impl(
     world: &GridWorld,
-    opts: &TrainOptions,
+    opts: &Learning,
     initial_q: Option<QTable>,
     progress: Option<&dyn Fn(u32)>,
     rollout_every_episode: bool,
@@ -923,7 +926,7 @@ fn train_impl(
 /// the call began (for `wall_time_s`).
 fn learn<V: QValue>(
     world: &GridWorld,
-    opts: &TrainOptions,
+    opts: &Learning,
     mut rows: Vec<[V; NUM_ACTIONS]>,
     progress: Option<&dyn Fn(u32)>,
     rollout_every_episode: bool,
@@ -933,7 +936,7 @@ fn learn<V: QValue>(
     let qr: &mut [[V; NUM_ACTIONS]] = &mut rows;
     // Rewards, computed exactly as `GridWorld::step` does: eq. 5 by kind of move
     // (plain, collision, reaching), plus eq. 10 by new state, plus eq. 9.
-    let assist = opts.assist;
+    let assist = opts.assist();
     let rw = world.rewards();
     let eq5 = [-rw.step_penalty, -rw.collision_penalty, rw.target_reward];
     let distance = assist.distance;
@@ -1113,16 +1116,17 @@ fn learn<V: QValue>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::Scenario;
 
     #[test]
     fn epsilon_schedule() {
         let s = Scenario::builtin("paper_simple").unwrap();
-        let o = TrainOptions::from_scenario(&s);
+        let o = Learning::from_scenario(&s);
         assert_eq!(o.epsilon(0), 0.1);
         assert!((o.epsilon(4950) - 0.05).abs() < 1e-15);
         assert_eq!(o.epsilon(9900), 0.0);
         assert_eq!(o.epsilon(9901), 0.0);
-        let o0 = TrainOptions {
+        let o0 = Learning {
             epsilon_decay_episodes: 0,
             ..o
         };
@@ -1181,10 +1185,11 @@ mod tests {
         ] {
             let s = Scenario::builtin(name).unwrap();
             let w = GridWorld::new(&s).unwrap();
-            let o = TrainOptions {
-                assist,
+            let o = Learning {
+                assist_detour: assist.detour,
+                assist_distance: assist.distance,
                 initial_q: InitialQ::Distance,
-                ..TrainOptions::from_scenario(&s)
+                ..Learning::from_scenario(&s)
             };
             let v0 = distance_bound_values(&w, &o);
             let best = best_collision_free_return(&w, assist, o.gamma);
@@ -1220,9 +1225,10 @@ mod tests {
         s.obstacles.clear();
         let w = GridWorld::new(&s).unwrap();
         for assist in [Assist::on(), Assist::off()] {
-            let o = TrainOptions {
-                assist,
-                ..TrainOptions::from_scenario(&s)
+            let o = Learning {
+                assist_detour: assist.detour,
+                assist_distance: assist.distance,
+                ..Learning::from_scenario(&s)
             };
             let v0 = distance_bound_values(&w, &o);
             let best = best_collision_free_return(&w, assist, o.gamma);
@@ -1248,13 +1254,13 @@ mod tests {
     fn initial_q_rule_and_explicit_table() {
         let s = Scenario::builtin("paper_simple").unwrap();
         let w = GridWorld::new(&s).unwrap();
-        let zero = TrainOptions::from_scenario(&s);
+        let zero = Learning::from_scenario(&s);
         assert_eq!(
             zero.initial_q,
             InitialQ::Zero,
             "the paper's learner by default"
         );
-        let dist = TrainOptions {
+        let dist = Learning {
             episodes: 1,
             initial_q: InitialQ::Distance,
             epsilon_start: 0.0,
@@ -1272,7 +1278,7 @@ mod tests {
         let a = train(&w, &dist, Some(given), None).unwrap();
         let b = train(
             &w,
-            &TrainOptions {
+            &Learning {
                 initial_q: InitialQ::Zero,
                 ..dist.clone()
             },
@@ -1288,7 +1294,7 @@ mod tests {
         // The incremental converged-episode bookkeeping must agree with a fresh rollout.
         let s = Scenario::builtin("paper_simple").unwrap();
         let w = GridWorld::new(&s).unwrap();
-        let mut o = TrainOptions::from_scenario(&s);
+        let mut o = Learning::from_scenario(&s);
         o.episodes = 300;
         o.epsilon_decay_episodes = 297;
         let r = train(&w, &o, None, None).unwrap();
@@ -1301,11 +1307,11 @@ mod tests {
         ] {
             let s = Scenario::builtin(name).unwrap();
             let w = GridWorld::new(&s).unwrap();
-            let mut o = TrainOptions::from_scenario(&s);
+            let mut o = Learning::from_scenario(&s);
             o.episodes = 2000;
             o.epsilon_decay_episodes = 1980;
             o.seed = seed;
-            o.assist = assist;
+            o.set_assist(assist);
             let fast = train_impl(&w, &o, None, None, false).unwrap();
             let slow = train_impl(&w, &o, None, None, true).unwrap();
             assert_eq!(fast.q, slow.q);

@@ -46,14 +46,14 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::grid::GridWorld;
 use crate::planner::{PosePlan, PosePlanner};
-use crate::qlearning::{train, TrainOptions};
+use crate::qlearning::{train, Learning};
 use crate::scenario::{Cell, ClearanceModel, ObstacleBox, PoseSearchMode, Scenario};
 
 /// Options of one Algorithm 2 run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PlanOptions {
     /// Learning options of every round (episodes, seed, assistance, ...).
-    pub train: TrainOptions,
+    pub train: Learning,
     /// Re-plans allowed before giving up.
     pub max_replans: u32,
 }
@@ -62,7 +62,7 @@ impl PlanOptions {
     /// The scenario's own settings.
     pub fn from_scenario(s: &Scenario) -> Self {
         PlanOptions {
-            train: TrainOptions::from_scenario(s),
+            train: Learning::from_scenario(s),
             max_replans: s.planning.max_replans,
         }
     }
@@ -115,7 +115,7 @@ pub trait PathLearner {
 #[derive(Debug, Clone, PartialEq)]
 pub struct QLearner {
     /// Learning options of every round.
-    pub opts: TrainOptions,
+    pub opts: Learning,
 }
 
 impl PathLearner for QLearner {
@@ -229,7 +229,8 @@ pub struct RoundSummary {
     pub mode: PoseSearchMode,
 }
 
-/// The result of [`plan`]; serialises to the JSON of `sixaxis plan` (SPEC section 3).
+/// The result of [`plan`]; serialises to the JSON of `sixaxis plan`
+/// (docs/SCENARIOS.md "JSON outputs of the CLI").
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PlanResult {
     /// Whether every path point got a safe pose.

@@ -1,32 +1,32 @@
-//! Requests: what a caller asks of a training or planning run, as optional overrides of the
-//! scenario's settings, resolved in one place.
+//! Requests: what a caller asks of a training or planning run, as options by key that
+//! override the scenario's settings, resolved in one place.
 //!
 //! Entry points:
-//! - [`TrainRequest`] — episodes, seed, assistance (eqs. 9 and 10, together or each on its
-//!   own), the step cap, the initial Q-table rule and the Q-values' precision; [`TrainRequest::resolve`] against a scenario gives the
-//!   [`TrainOptions`] of [`crate::qlearning::train`].
-//! - [`PlanRequest`] — a training request plus the re-plan cap and the path learner;
-//!   [`PlanRequest::resolve`] gives the [`PlanOptions`] and [`LearnerKind`] of
-//!   [`crate::replanning::plan`].
-//! - [`parse_int`] — the integer text of a command-line flag, checked with the same words as
-//!   [`TrainRequest::resolve`] uses.
+//! - [`TrainRequest`] — options of a training run ([`train_options`]: the keys of
+//!   [`Learning::OPTIONS`] plus `assist` and `episode_cap`); [`TrainRequest::resolve`]
+//!   against a scenario gives the [`Learning`] of [`crate::qlearning::train`].
+//! - [`PlanRequest`] — the training options plus the re-plan cap and the path learner
+//!   ([`plan_options`]); [`PlanRequest::resolve`] gives the [`PlanOptions`] and
+//!   [`LearnerKind`] of [`crate::replanning::plan`].
+//! - [`train_options`] / [`plan_options`] — what each key is: domain, unit, doc, the scenario
+//!   field it overrides. The `sixaxis` CLI builds its flags from them and the Python bindings
+//!   their keywords, so both take the same values, use the same defaults and give the same
+//!   error text (named after the key: `seed`, `episodes`, ...).
 //!
-//! The `sixaxis` CLI maps its flags to a request and the Python bindings map their keywords
-//! to one; nothing else fills defaults or checks ranges, so both front ends take the same
-//! values, use the same defaults and give the same error text (named after the Python
-//! keyword: `seed`, `episodes`, ...). A field left `None` takes the scenario's value.
-//! Integers are carried as `i128` so that an out-of-range value (a negative seed, an episode
-//! count past `u32`) reaches [`TrainRequest::resolve`] and gets its error there.
+//! A key left out takes the scenario's value. Keys apply in the table's order: `assist`
+//! (both eqs. 9 and 10 on or off) before `detour` and `distance` (each on its own), and
+//! `episodes` (a number, or `"auto"`) before `episode_cap` (the cap of `"auto"`, an error
+//! otherwise).
 //!
 //! ```
 //! use sixaxis_core::request::{PlanRequest, TrainRequest};
 //! use sixaxis_core::Scenario;
 //! let s = Scenario::builtin("paper_simple").unwrap();
-//! let req = TrainRequest { seed: Some(3), detour: Some(false), ..Default::default() };
+//! let req = TrainRequest::default().with("seed", 3).with("detour", false);
 //! let opts = req.resolve(&s).unwrap();
 //! assert_eq!((opts.seed, opts.episodes), (3, 10_000));
-//! assert!(!opts.assist.detour && opts.assist.distance);
-//! let bad = TrainRequest { seed: Some(-1), ..Default::default() };
+//! assert!(!opts.assist_detour && opts.assist_distance);
+//! let bad = TrainRequest::default().with("seed", -1);
 //! assert_eq!(
 //!     bad.resolve(&s).unwrap_err().to_string(),
 //!     "invalid argument `seed` = -1: must be an integer >= 0"
@@ -37,206 +37,195 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::qlearning::TrainOptions;
+use crate::options::{
+    apply, named_enum, Domain, FromOption, OptionInfo, OptionSpec, OptionValue, Options,
+};
 use crate::replanning::PlanOptions;
-use crate::scenario::{InitialQ, QPrecision, Scenario};
+use crate::scenario::{Learning, Scenario, AUTO_EPISODE_CAP};
 
-/// Overrides of a training run; `None` takes the scenario's `learning` value.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TrainRequest {
-    /// eta_set: learning episodes, `1..=u32::MAX`.
-    pub episodes: Option<i128>,
-    /// `episodes = "auto"`: train until the greedy path reaches the target and stops
-    /// changing (the rule of [`crate::qlearning`]), under `episode_cap`.
-    pub episodes_auto: Option<bool>,
-    /// Episode cap of `episodes_auto`, `1..=u32::MAX` (default
-    /// [`crate::qlearning::AUTO_EPISODE_CAP`]); only with `episodes_auto`.
-    pub episode_cap: Option<i128>,
-    /// Seed of the learner's generator, `0..=u64::MAX`.
-    pub seed: Option<i128>,
-    /// Both assisted strategies (eqs. 9 and 10) on or off; `detour` / `distance` then
-    /// switch one of them.
-    pub assist: Option<bool>,
-    /// Detour encouraging (eq. 9) on or off (after `assist`).
-    pub detour: Option<bool>,
-    /// Distance assistance (eq. 10) on or off (after `assist`).
-    pub distance: Option<bool>,
-    /// Step cap of an episode and of the greedy rollout, `1..=u32::MAX`.
-    pub max_steps_per_episode: Option<i128>,
-    /// How the Q-table starts, by name: `"zero"` (the paper) or `"distance"` (see
-    /// [`crate::qlearning::distance_bound_table`]); default the scenario's
-    /// `learning.initial_q`.
-    pub initial_q: Option<String>,
-    /// The type of the Q-values, by name: `"f64"` (the default) or `"f32"` (half the
-    /// memory per state); default the scenario's `learning.q_precision`.
-    pub q_precision: Option<String>,
-}
-
-/// The path learners [`PlanRequest::learner`] can name.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LearnerKind {
-    /// Tabular Q-learning, the paper's ([`crate::replanning::QLearner`]).
-    #[default]
-    Qlearning,
-    /// The breadth-first shortest path ([`crate::replanning::BfsLearner`]).
-    Bfs,
-}
-
-impl LearnerKind {
-    /// Every name, in the order of the docs.
-    pub const NAMES: &'static [&'static str] = &["qlearning", "bfs"];
-
-    /// The learner of a name (`qlearning`, `bfs`); the error lists the names.
-    pub fn from_name(name: &str) -> Result<Self> {
-        match name {
-            "qlearning" => Ok(LearnerKind::Qlearning),
-            "bfs" => Ok(LearnerKind::Bfs),
-            _ => Err(Error::argument(
-                "learner",
-                name,
-                format!(
-                    "must be one of {} (or, from Python, a callable)",
-                    Self::NAMES.join(", ")
-                ),
-            )),
-        }
+named_enum! {
+    /// The path learners [`PlanRequest`]'s `learner` can name.
+    pub enum LearnerKind (default Qlearning) {
+        /// Tabular Q-learning, the paper's ([`crate::replanning::QLearner`]).
+        Qlearning = "qlearning",
+        /// The breadth-first shortest path ([`crate::replanning::BfsLearner`]).
+        Bfs = "bfs",
     }
 }
 
-/// Overrides of an Algorithm 2 run: the training request of every round, the re-plan cap
-/// and the path learner. (Room to grow: a planning mode and its n_d rule go here.)
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct PlanRequest {
-    /// Learning options of every round.
-    pub train: TrainRequest,
-    /// Re-plans allowed before giving up, `0..=u32::MAX` (default: the scenario's
-    /// `planning.max_replans`).
-    pub max_replans: Option<i128>,
-    /// The path learner by name (default `qlearning`; see [`LearnerKind::from_name`]).
-    pub learner: Option<String>,
-}
+/// `assist`: both strategies at once (a request key with no scenario field of its own).
+static ASSIST: OptionSpec<Learning> = OptionSpec {
+    info: OptionInfo {
+        key: "assist",
+        field: "",
+        domain: Domain::Bool,
+        unit: "",
+        doc: "Both assisted strategies (eqs. 9 and 10) on or off; `detour` and `distance` then switch one of them.",
+    },
+    get: |o| OptionValue::Bool(o.assist_detour && o.assist_distance),
+    set: |o, key, v| {
+        let a = bool::from_option(key, &Domain::Bool, v)?;
+        o.assist_detour = a;
+        o.assist_distance = a;
+        Ok(())
+    },
+};
 
-/// The words of an integer's domain, as every error about one says them.
-pub fn int_domain(min: i128, max: i128) -> String {
-    if max == u64::MAX as i128 {
-        format!("must be an integer >= {min}")
-    } else {
-        format!("must be an integer in {min}..={max}")
-    }
-}
-
-/// `value` checked against `domain` = (name, min, max), e.g. [`SEED`]; the error names it.
-pub fn in_domain(domain: (&str, i128, i128), value: i128) -> Result<i128> {
-    let (name, min, max) = domain;
-    if (min..=max).contains(&value) {
-        Ok(value)
-    } else {
-        Err(Error::argument(name, value, int_domain(min, max)))
-    }
-}
-
-/// Domains of the integer fields: (name, min, max).
-pub const SEED: (&str, i128, i128) = ("seed", 0, u64::MAX as i128);
-/// See [`SEED`].
-pub const EPISODES: (&str, i128, i128) = ("episodes", 1, u32::MAX as i128);
-/// See [`SEED`].
-pub const EPISODE_CAP: (&str, i128, i128) = ("episode_cap", 1, u32::MAX as i128);
-/// See [`SEED`].
-pub const MAX_STEPS: (&str, i128, i128) = ("max_steps_per_episode", 1, u32::MAX as i128);
-/// See [`SEED`].
-pub const MAX_REPLANS: (&str, i128, i128) = ("max_replans", 0, u32::MAX as i128);
-
-/// `--episodes` text: a whole number of episodes, or `auto` (then `(None, true)`).
-pub fn parse_episodes(text: &str) -> Result<(Option<i128>, bool)> {
-    if text.trim() == "auto" {
-        return Ok((None, true));
-    }
-    parse_int(EPISODES, text).map(|n| (Some(n), false))
-}
-
-/// The integer written in `text` (a command-line value), or the error
-/// [`TrainRequest::resolve`] would give for a value out of `domain` (e.g. [`SEED`]).
-pub fn parse_int(domain: (&str, i128, i128), text: &str) -> Result<i128> {
-    let (name, min, max) = domain;
-    text.trim()
-        .parse::<i128>()
-        .map_err(|_| Error::argument(name, text, int_domain(min, max)))
-}
-
-fn checked(domain: (&str, i128, i128), v: Option<i128>) -> Result<Option<i128>> {
-    v.map(|v| in_domain(domain, v)).transpose()
-}
-
-impl TrainRequest {
-    /// The scenario's learning options with these overrides, every range checked.
-    pub fn resolve(&self, s: &Scenario) -> Result<TrainOptions> {
-        let mut opts = TrainOptions::from_scenario(s);
-        if let Some(v) = checked(EPISODES, self.episodes)? {
-            opts.episodes = v as u32;
-        }
-        let cap = checked(EPISODE_CAP, self.episode_cap)?;
-        if self.episodes_auto == Some(true) {
-            if let Some(n) = self.episodes {
-                return Err(Error::argument(
-                    "episodes",
-                    n,
-                    "is either a number of episodes or \"auto\", not both",
-                ));
-            }
-            opts = opts.auto();
-            if let Some(c) = cap {
-                opts.episodes = c as u32;
-            }
-        } else if let Some(c) = cap {
+/// `episode_cap`: the cap of `episodes = "auto"`.
+static EPISODE_CAP: OptionSpec<Learning> = OptionSpec {
+    info: OptionInfo {
+        key: "episode_cap",
+        field: "",
+        domain: Domain::u32_from(1),
+        unit: "episodes",
+        doc: "Episode cap of `episodes = \"auto\"` (default 1000000); only with `episodes = \"auto\"`.",
+    },
+    get: |o| {
+        OptionValue::Int(if o.episodes_auto {
+            o.episodes
+        } else {
+            AUTO_EPISODE_CAP
+        } as i128)
+    },
+    set: |o, key, v| {
+        let cap = u32::from_option(key, &Domain::u32_from(1), v)?;
+        if !o.episodes_auto {
             return Err(Error::argument(
-                "episode_cap",
-                c,
+                key,
+                cap,
                 "applies only with episodes = \"auto\"",
             ));
         }
-        if let Some(v) = checked(SEED, self.seed)? {
-            opts.seed = v as u64;
-        }
-        if let Some(v) = checked(MAX_STEPS, self.max_steps_per_episode)? {
-            opts.max_steps_per_episode = v as u32;
-        }
-        if let Some(a) = self.assist {
-            opts.assist.detour = a;
-            opts.assist.distance = a;
-        }
-        if let Some(d) = self.detour {
-            opts.assist.detour = d;
-        }
-        if let Some(d) = self.distance {
-            opts.assist.distance = d;
-        }
-        if let Some(name) = &self.initial_q {
-            opts.initial_q = InitialQ::from_name("initial_q", name)?;
-        }
-        if let Some(name) = &self.q_precision {
-            opts.q_precision = QPrecision::from_name("q_precision", name)?;
-        }
+        o.episodes = cap;
+        Ok(())
+    },
+};
+
+/// The options of a training run, in the order they apply: `assist`, every keyed option of
+/// [`Learning::OPTIONS`], `episode_cap`.
+pub fn train_table() -> Vec<&'static OptionSpec<Learning>> {
+    std::iter::once(&ASSIST)
+        .chain(Learning::OPTIONS.iter().filter(|s| !s.info.key.is_empty()))
+        .chain(std::iter::once(&EPISODE_CAP))
+        .collect()
+}
+
+/// What each option of a training run is (see [`train_table`]).
+pub fn train_options() -> Vec<OptionInfo> {
+    train_table().iter().map(|s| s.info).collect()
+}
+
+/// The options Algorithm 2 adds to a training run's.
+static PLAN_ONLY: [OptionSpec<(PlanOptions, LearnerKind)>; 2] = [
+    OptionSpec {
+        info: OptionInfo {
+            key: "max_replans",
+            field: "planning.max_replans",
+            domain: Domain::u32_from(0),
+            unit: "re-plans",
+            doc: "Re-plans allowed before Algorithm 2 gives up.",
+        },
+        get: |(p, _)| OptionValue::Int(p.max_replans as i128),
+        set: |(p, _), key, v| {
+            p.max_replans = u32::from_option(key, &Domain::u32_from(0), v)?;
+            Ok(())
+        },
+    },
+    OptionSpec {
+        info: OptionInfo {
+            key: "learner",
+            field: "",
+            domain: LearnerKind::DOMAIN,
+            unit: "",
+            doc: "The path learner of every round: `qlearning` (the paper's) or `bfs` (the shortest path); from Python also a callable.",
+        },
+        get: |(_, l)| OptionValue::Text(l.name().to_string()),
+        set: |(_, l), key, v| {
+            *l = LearnerKind::from_option(key, &LearnerKind::DOMAIN, v)?;
+            Ok(())
+        },
+    },
+];
+
+/// What each option of an Algorithm 2 run is: [`train_options`], `max_replans`, `learner`.
+pub fn plan_options() -> Vec<OptionInfo> {
+    let mut all = train_options();
+    all.extend(PLAN_ONLY.iter().map(|s| s.info));
+    all
+}
+
+/// The value of every option of [`plan_options`] in scenario `s` (by key): what a request
+/// that leaves the key out gets.
+pub fn option_values(s: &Scenario) -> Vec<(&'static str, OptionValue)> {
+    let mut out: Vec<(&'static str, OptionValue)> = train_table()
+        .iter()
+        .map(|spec| (spec.info.key, (spec.get)(&s.learning)))
+        .collect();
+    let plan = (PlanOptions::from_scenario(s), LearnerKind::default());
+    out.extend(
+        PLAN_ONLY
+            .iter()
+            .map(|spec| (spec.info.key, (spec.get)(&plan))),
+    );
+    out
+}
+
+/// Options of a training run by key; a key left out takes the scenario's `learning` value.
+/// Serialises as a JSON object: `{"seed": 3, "episodes": "auto"}`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct TrainRequest(pub Options);
+
+impl TrainRequest {
+    /// This request with `key` set to `value`.
+    pub fn with(mut self, key: &str, value: impl Into<OptionValue>) -> Self {
+        self.0.insert(key.to_string(), value.into());
+        self
+    }
+
+    /// The scenario's learning options with these overrides, every range checked.
+    pub fn resolve(&self, s: &Scenario) -> Result<Learning> {
+        let mut opts = s.learning;
+        apply(&train_table(), &self.0, &mut opts)?;
         opts.validate()?;
         Ok(opts)
     }
 }
 
+/// Options of an Algorithm 2 run by key: those of [`TrainRequest`] for every round, plus
+/// `max_replans` and `learner` ([`plan_options`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct PlanRequest(pub Options);
+
 impl PlanRequest {
+    /// This request with `key` set to `value`.
+    pub fn with(mut self, key: &str, value: impl Into<OptionValue>) -> Self {
+        self.0.insert(key.to_string(), value.into());
+        self
+    }
+
     /// The scenario's planning options with these overrides, and the learner asked for.
     pub fn resolve(&self, s: &Scenario) -> Result<(PlanOptions, LearnerKind)> {
-        let mut opts = PlanOptions::from_scenario(s);
-        opts.train = self.train.resolve(s)?;
-        if let Some(v) = checked(MAX_REPLANS, self.max_replans)? {
-            opts.max_replans = v as u32;
+        let plan_only: Vec<&OptionSpec<(PlanOptions, LearnerKind)>> = PLAN_ONLY.iter().collect();
+        let is_plan = |k: &str| plan_only.iter().any(|p| p.info.key == k);
+        let (mine, train): (Options, Options) =
+            self.0.clone().into_iter().partition(|(k, _)| is_plan(k));
+        if let Some(unknown) = train
+            .keys()
+            .find(|k| !train_table().iter().any(|t| t.info.key == k.as_str()))
+        {
+            let keys: Vec<&str> = plan_options().iter().map(|i| i.key).collect();
+            return Err(Error::argument(
+                unknown.as_str(),
+                &train[unknown],
+                format!("is no option here; the options are {}", keys.join(", ")),
+            ));
         }
-        let learner = match &self.learner {
-            Some(name) => LearnerKind::from_name(name)?,
-            None => LearnerKind::default(),
-        };
-        Ok((opts, learner))
+        let mut target = (PlanOptions::from_scenario(s), LearnerKind::default());
+        target.0.train = TrainRequest(train).resolve(s)?;
+        apply(&plan_only, &mine, &mut target)?;
+        Ok(target)
     }
 }
 
@@ -248,99 +237,52 @@ mod tests {
         Scenario::builtin("paper_simple").unwrap()
     }
 
+    fn err(r: &TrainRequest) -> String {
+        r.resolve(&s()).unwrap_err().to_string()
+    }
+
     #[test]
     fn episodes_auto_and_its_cap() {
         let s = s();
-        assert_eq!(parse_episodes("auto").unwrap(), (None, true));
-        assert_eq!(parse_episodes("12").unwrap(), (Some(12), false));
-        assert!(parse_episodes("often").is_err());
-        let auto = TrainRequest {
-            episodes_auto: Some(true),
-            ..Default::default()
-        };
+        let auto = TrainRequest::default().with("episodes", "auto");
         let o = auto.resolve(&s).unwrap();
         assert!(o.episodes_auto);
-        assert_eq!(o.episodes, crate::qlearning::AUTO_EPISODE_CAP);
-        let capped = TrainRequest {
-            episode_cap: Some(5000),
-            ..auto.clone()
-        };
+        assert_eq!(o.episodes, AUTO_EPISODE_CAP);
+        let capped = auto.clone().with("episode_cap", 5000);
         assert_eq!(capped.resolve(&s).unwrap().episodes, 5000);
-        let zero = TrainRequest {
-            episode_cap: Some(0),
-            ..auto.clone()
-        };
-        assert!(zero
-            .resolve(&s)
-            .unwrap_err()
-            .to_string()
-            .contains("`episode_cap` = 0"));
-        let cap_alone = TrainRequest {
-            episode_cap: Some(10),
-            ..Default::default()
-        };
-        let e = cap_alone.resolve(&s).unwrap_err().to_string();
+        assert!(err(&auto.clone().with("episode_cap", 0)).contains("`episode_cap` = 0"));
+        let e = err(&TrainRequest::default().with("episode_cap", 10));
         assert!(e.contains("only with episodes = \"auto\""), "{e}");
-        let both = TrainRequest {
-            episodes: Some(10),
-            ..auto
-        };
-        assert!(both.resolve(&s).is_err());
+        assert_eq!(
+            err(&TrainRequest::default().with("episodes", "often")),
+            "invalid argument `episodes` = often: must be an integer in 1..=4294967295 or \"auto\""
+        );
     }
 
     #[test]
     fn empty_request_is_the_scenario() {
         let s = s();
-        assert_eq!(
-            TrainRequest::default().resolve(&s).unwrap(),
-            TrainOptions::from_scenario(&s)
-        );
+        assert_eq!(TrainRequest::default().resolve(&s).unwrap(), s.learning);
         let (p, l) = PlanRequest::default().resolve(&s).unwrap();
         assert_eq!(p, PlanOptions::from_scenario(&s));
         assert_eq!(l, LearnerKind::Qlearning);
     }
 
     #[test]
-    fn initial_q_by_name() {
+    fn choices_by_name() {
         let s = s();
+        let d = TrainRequest::default().with("initial_q", "distance");
         assert_eq!(
-            TrainRequest::default().resolve(&s).unwrap().initial_q,
-            InitialQ::Zero
+            d.resolve(&s).unwrap().initial_q,
+            crate::scenario::InitialQ::Distance
         );
-        let d = TrainRequest {
-            initial_q: Some("distance".into()),
-            ..Default::default()
-        };
-        assert_eq!(d.resolve(&s).unwrap().initial_q, InitialQ::Distance);
-        let bad = TrainRequest {
-            initial_q: Some("optimistic".into()),
-            ..Default::default()
-        };
         assert_eq!(
-            bad.resolve(&s).unwrap_err().to_string(),
+            err(&TrainRequest::default().with("initial_q", "optimistic")),
             "invalid argument `initial_q` = optimistic: must be one of zero, distance"
         );
-    }
-
-    #[test]
-    fn q_precision_by_name() {
-        let s = s();
-        assert_eq!(
-            TrainRequest::default().resolve(&s).unwrap().q_precision,
-            QPrecision::F64
-        );
-        let f = TrainRequest {
-            q_precision: Some("f32".into()),
-            ..Default::default()
-        };
-        assert_eq!(f.resolve(&s).unwrap().q_precision, QPrecision::F32);
         for name in ["f16", "F32", ""] {
-            let bad = TrainRequest {
-                q_precision: Some(name.into()),
-                ..Default::default()
-            };
             assert_eq!(
-                bad.resolve(&s).unwrap_err().to_string(),
+                err(&TrainRequest::default().with("q_precision", name)),
                 format!("invalid argument `q_precision` = {name}: must be one of f64, f32")
             );
         }
@@ -348,68 +290,90 @@ mod tests {
 
     #[test]
     fn assist_then_each_strategy() {
-        let s = s();
-        let r = TrainRequest {
-            assist: Some(false),
-            distance: Some(true),
-            ..Default::default()
-        };
-        let a = r.resolve(&s).unwrap().assist;
+        let r = TrainRequest::default()
+            .with("distance", true)
+            .with("assist", false);
+        let a = r.resolve(&s()).unwrap().assist();
         assert!(!a.detour && a.distance);
     }
 
     #[test]
     fn bad_values_name_the_field() {
-        let s = s();
         for (req, text) in [
             (
-                TrainRequest {
-                    episodes: Some(0),
-                    ..Default::default()
-                },
-                "invalid argument `episodes` = 0: must be an integer in 1..=4294967295",
+                TrainRequest::default().with("episodes", 0),
+                "invalid argument `episodes` = 0: must be an integer in 1..=4294967295 or \"auto\"",
             ),
             (
-                TrainRequest {
-                    seed: Some(u64::MAX as i128 + 1),
-                    ..Default::default()
-                },
+                TrainRequest(
+                    [("seed".to_string(), OptionValue::Int(u64::MAX as i128 + 1))].into(),
+                ),
                 "invalid argument `seed` = 18446744073709551616: must be an integer >= 0",
             ),
             (
-                TrainRequest {
-                    max_steps_per_episode: Some(-3),
-                    ..Default::default()
-                },
+                TrainRequest::default().with("max_steps_per_episode", -3),
                 "invalid argument `max_steps_per_episode` = -3: must be an integer in 1..=4294967295",
             ),
+            (
+                TrainRequest::default().with("alpha", 0.0),
+                "invalid argument `alpha` = 0: must be a number in (0, 1]",
+            ),
+            (
+                TrainRequest::default().with("seed", true),
+                "invalid argument `seed` = true: must be an integer >= 0",
+            ),
         ] {
-            assert_eq!(req.resolve(&s).unwrap_err().to_string(), text);
+            assert_eq!(err(&req), text);
         }
-        let p = PlanRequest {
-            learner: Some("dqn".into()),
-            ..Default::default()
-        };
-        assert!(p
-            .resolve(&s)
-            .unwrap_err()
-            .to_string()
-            .contains("`learner` = dqn"));
+        let e = err(&TrainRequest::default().with("sede", 4));
+        assert!(e.starts_with("invalid argument `sede` = 4: is no option here; the options are assist, episodes, seed"), "{e}");
+        let p = PlanRequest::default().with("learner", "dqn");
+        let e = p.resolve(&s()).unwrap_err().to_string();
         assert_eq!(
-            parse_int(SEED, "1.5").unwrap_err().to_string(),
-            "invalid argument `seed` = 1.5: must be an integer >= 0"
+            e,
+            "invalid argument `learner` = dqn: must be one of qlearning, bfs"
+        );
+        let e = PlanRequest::default()
+            .with("replans", 2)
+            .resolve(&s())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("max_replans, learner"), "{e}");
+    }
+
+    #[test]
+    fn every_learning_field_is_checked_with_the_request_words() {
+        // A scenario with alpha out of range is refused with the same domain words as a
+        // request, naming the scenario field.
+        let mut s = s();
+        s.learning.alpha = 2.0;
+        assert_eq!(
+            s.validate().unwrap_err().to_string(),
+            "invalid scenario: field `learning.alpha` = 2: must be a number in (0, 1]"
         );
     }
 
     #[test]
     fn requests_round_trip_through_json() {
         let p: PlanRequest =
-            serde_json::from_str(r#"{"train": {"seed": 4, "assist": false}, "learner": "bfs"}"#)
-                .unwrap();
-        assert_eq!(p.train.seed, Some(4));
-        assert_eq!(p.train.assist, Some(false));
+            serde_json::from_str(r#"{"seed": 4, "assist": false, "learner": "bfs"}"#).unwrap();
+        assert_eq!(p.0["seed"], OptionValue::Int(4));
+        let (opts, l) = p.resolve(&s()).unwrap();
+        assert_eq!((opts.train.seed, l), (4, LearnerKind::Bfs));
         let back: PlanRequest = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
         assert_eq!(back, p);
-        assert!(serde_json::from_str::<TrainRequest>(r#"{"sede": 4}"#).is_err());
+    }
+
+    #[test]
+    fn every_key_is_documented_once() {
+        let keys: Vec<&str> = plan_options().iter().map(|i| i.key).collect();
+        let mut unique = keys.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), keys.len(), "{keys:?}");
+        for i in plan_options() {
+            assert!(!i.doc_line().is_empty(), "{} has no doc", i.key);
+        }
+        assert!(!keys.contains(&""));
     }
 }

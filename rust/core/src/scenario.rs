@@ -31,6 +31,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
+use crate::options::{named_enum, option_set, Domain, FromOption, OptionValue};
 
 /// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.
 pub type Cell = [i32; 3];
@@ -224,174 +225,197 @@ impl Default for Rewards {
     }
 }
 
-/// Q-learning parameters (eqs. 6-7) and the assisted strategies.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Learning {
-    /// alpha: learning rate.
-    pub alpha: f64,
-    /// gamma: discount factor.
-    pub gamma: f64,
-    /// epsilon at episode 0 (eq. 7: 0.1).
-    pub epsilon_start: f64,
-    /// M: episodes over which epsilon falls linearly to 0.
-    pub epsilon_decay_episodes: u32,
-    /// eta_set: number of learning episodes.
-    pub episodes: u32,
-    /// Step cap of one episode (the paper gives none).
-    pub max_steps_per_episode: u32,
-    /// Detour encouraging (eq. 9) on or off.
-    pub assist_detour: bool,
-    /// Distance assistance (eq. 10) on or off.
-    pub assist_distance: bool,
-    /// Default seed of the learner's random generator.
-    pub seed: u64,
-    /// How the Q-table starts: `"zero"` (the paper, eq. 6) or `"distance"` (ours: an
-    /// optimistic bound from the Manhattan distance to the target, see
-    /// [`crate::qlearning`]).
-    pub initial_q: InitialQ,
-    /// The type of the Q-values: `"f64"` (the paper's arithmetic, the default) or `"f32"`
-    /// (ours: half the memory per state; see [`crate::qlearning`]).
-    pub q_precision: QPrecision,
+/// Default episode cap of `episodes = "auto"` (`--episodes auto`), episodes.
+pub const AUTO_EPISODE_CAP: u32 = 1_000_000;
+
+/// The domain of eq. 6's alpha: (0, 1].
+const UNIT_OPEN: Domain = Domain::Float {
+    min: 0.0,
+    max: 1.0,
+    open_min: true,
+};
+/// The domain of a probability or a discount: [0, 1].
+const UNIT: Domain = Domain::Float {
+    min: 0.0,
+    max: 1.0,
+    open_min: false,
+};
+
+option_set! {
+    /// Q-learning parameters (eqs. 6-7) and the assisted strategies: the scenario's
+    /// `learning` section and the options of a training run (the one declaration of the
+    /// learning options: the scenario schema, the request layer, the CLI's flags, the Python
+    /// keywords, the stub and the docs' table are derived from it; see [`crate::options`]).
+    pub struct Learning ("learning") {
+        /// eta_set: learning episodes; with `episodes = "auto"` (ours), train until the
+        /// greedy path reaches the target and stops changing, under `episode_cap`.
+        episodes: u32 = 10_000; "episodes", Domain::IntOrAuto { min: 1, max: u32::MAX as i128 }, "episodes",
+            set = set_episodes;
+        /// Whether `episodes` is a cap and the run stops when the greedy path settles (set
+        /// by `episodes = "auto"`; see docs/SCENARIOS.md).
+        episodes_auto: bool = false; "", Domain::Bool, "";
+        /// Seed of the learner's random generator.
+        seed: u64 = 0; "seed", Domain::u64_from(0), "";
+        /// Detour encouraging (eq. 9) on or off.
+        assist_detour: bool = true; "detour", Domain::Bool, "";
+        /// Distance assistance (eq. 10) on or off.
+        assist_distance: bool = true; "distance", Domain::Bool, "";
+        /// Step cap of an episode and of the greedy rollout (the paper gives none).
+        max_steps_per_episode: u32 = 1000; "max_steps_per_episode", Domain::u32_from(1), "steps";
+        /// How the Q-table starts: `zero` (the paper, eq. 6) or `distance` (ours: an
+        /// optimistic bound from the Manhattan distance to the target; see docs/SCENARIOS.md).
+        initial_q: InitialQ = InitialQ::Zero; "initial_q", InitialQ::DOMAIN, "";
+        /// The type of the Q-values: `f64` (the paper's arithmetic) or `f32` (ours: half the
+        /// memory per state; updates computed in f64, stored rounded).
+        q_precision: QPrecision = QPrecision::F64; "q_precision", QPrecision::DOMAIN, "";
+        /// alpha: learning rate of eq. 6.
+        alpha: f64 = 0.05; "alpha", UNIT_OPEN, "";
+        /// gamma: discount factor of eq. 6.
+        gamma: f64 = 0.9; "gamma", UNIT, "";
+        /// epsilon at episode 0 (eq. 7: 0.1).
+        epsilon_start: f64 = 0.1; "epsilon_start", UNIT, "";
+        /// M: episodes over which epsilon falls linearly to 0 (eq. 7).
+        epsilon_decay_episodes: u32 = 9900; "epsilon_decay_episodes", Domain::u32_from(0), "episodes";
+    }
 }
 
-/// How the learner's Q-table starts (`learning.initial_q`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(try_from = "String", into = "String")]
-pub enum InitialQ {
-    /// Q = 0 everywhere: the paper's learner, the default of every scenario.
-    #[default]
-    Zero,
-    /// Ours: Q(s, a) starts at an optimistic bound of the return of reaching the target
-    /// from the move's next cell in its Manhattan distance of moves (the rule of
-    /// [`crate::qlearning`]).
-    Distance,
+/// `episodes`: a number of episodes, or `"auto"` (then `episodes` is the cap
+/// [`AUTO_EPISODE_CAP`] until `episode_cap` says otherwise).
+fn set_episodes(o: &mut Learning, key: &str, v: &OptionValue) -> Result<()> {
+    const DOMAIN: Domain = Domain::IntOrAuto {
+        min: 1,
+        max: u32::MAX as i128,
+    };
+    // As a request key, a number is a fixed run; as the scenario field (`learning.episodes`,
+    // a number only), it stays with the file's `episodes_auto`.
+    let request = key == "episodes";
+    if request && matches!(v, OptionValue::Text(t) if t == "auto") {
+        o.episodes_auto = true;
+        o.episodes = AUTO_EPISODE_CAP;
+        return Ok(());
+    }
+    let domain = if request { DOMAIN } else { Domain::u32_from(1) };
+    o.episodes = u32::from_option(key, &domain, v)?;
+    if request {
+        o.episodes_auto = false;
+    }
+    Ok(())
 }
 
-impl InitialQ {
-    /// Every name, in the order of the docs.
-    pub const NAMES: &'static [&'static str] = &["zero", "distance"];
+impl Learning {
+    /// The scenario's `learning` section.
+    pub fn from_scenario(s: &Scenario) -> Self {
+        s.learning
+    }
 
-    /// The name used in scenario files, requests and results.
-    pub fn name(self) -> &'static str {
-        match self {
-            InitialQ::Zero => "zero",
-            InitialQ::Distance => "distance",
+    /// The assisted strategies on or off (eqs. 9 and 10).
+    pub fn assist(&self) -> Assist {
+        Assist {
+            detour: self.assist_detour,
+            distance: self.assist_distance,
         }
     }
 
-    /// The rule of a name (`"zero"`, `"distance"`); the error names `field` and the value
-    /// and lists the names.
-    pub fn from_name(field: &str, name: &str) -> Result<Self> {
-        match name {
-            "zero" => Ok(InitialQ::Zero),
-            "distance" => Ok(InitialQ::Distance),
-            _ => Err(Error::argument(field, name, Self::names_reason())),
+    /// Both strategies as one [`Assist`].
+    pub fn set_assist(&mut self, a: Assist) {
+        self.assist_detour = a.detour;
+        self.assist_distance = a.distance;
+    }
+
+    /// `episodes = "auto"`: train until the greedy path settles, under [`AUTO_EPISODE_CAP`].
+    pub fn auto(mut self) -> Self {
+        self.episodes_auto = true;
+        self.episodes = AUTO_EPISODE_CAP;
+        self
+    }
+
+    /// Check the ranges; the error names the option.
+    pub fn validate(&self) -> Result<()> {
+        for spec in Self::OPTIONS {
+            let v = (spec.get)(self);
+            let key = if spec.info.key.is_empty() {
+                spec.info.field
+            } else {
+                spec.info.key
+            };
+            (spec.set)(&mut self.clone(), key, &v)?;
+        }
+        Ok(())
+    }
+
+    /// Exploration rate of episode `episode` (counted from 0), eq. 7.
+    pub fn epsilon(&self, episode: u32) -> f64 {
+        let m = self.epsilon_decay_episodes;
+        if m == 0 || episode > m {
+            0.0
+        } else {
+            self.epsilon_start * (1.0 - episode as f64 / m as f64)
+        }
+    }
+}
+
+/// Which assisted-learning strategies shape the reward.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Assist {
+    /// Detour encouraging, eq. 9.
+    pub detour: bool,
+    /// Distance assistance, eq. 10.
+    pub distance: bool,
+}
+
+impl Assist {
+    /// Both strategies on ("with assisted learning").
+    pub fn on() -> Self {
+        Assist {
+            detour: true,
+            distance: true,
         }
     }
 
-    fn names_reason() -> String {
-        format!("must be one of {}", Self::NAMES.join(", "))
+    /// Both off: eq. 5 alone ("without assisted learning").
+    pub fn off() -> Self {
+        Assist {
+            detour: false,
+            distance: false,
+        }
+    }
+
+    /// The scenario's `learning.assist_detour` / `learning.assist_distance`.
+    pub fn from_scenario(s: &Scenario) -> Self {
+        s.learning.assist()
     }
 }
 
-impl TryFrom<String> for InitialQ {
-    type Error = String;
-    fn try_from(name: String) -> std::result::Result<Self, String> {
-        InitialQ::from_name("learning.initial_q", &name).map_err(|_| {
-            format!(
-                "field `learning.initial_q` = {name}: {}",
-                Self::names_reason()
-            )
-        })
+named_enum! {
+    /// How the learner's Q-table starts (`learning.initial_q`).
+    pub enum InitialQ (default Zero) {
+        /// Q = 0 everywhere: the paper's learner, the default of every scenario.
+        Zero = "zero",
+        /// Ours: Q(s, a) starts at an optimistic bound of the return of reaching the target
+        /// from the move's next cell in its Manhattan distance of moves (the rule of
+        /// `crate::qlearning`).
+        Distance = "distance",
     }
 }
 
-impl From<InitialQ> for String {
-    fn from(rule: InitialQ) -> String {
-        rule.name().to_string()
+named_enum! {
+    /// The type the learner stores its Q-values in (`learning.q_precision`).
+    pub enum QPrecision (default F64) {
+        /// 64-bit floats (48 bytes of Q-values per state): the default of every scenario.
+        F64 = "f64",
+        /// Ours: 32-bit floats (24 bytes per state). Every update is computed in f64 as with
+        /// `F64` and its result rounded to the nearest f32 when stored.
+        F32 = "f32",
     }
-}
-
-/// The type the learner stores its Q-values in (`learning.q_precision`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(try_from = "String", into = "String")]
-pub enum QPrecision {
-    /// 64-bit floats (48 bytes of Q-values per state): the default of every scenario.
-    #[default]
-    F64,
-    /// Ours: 32-bit floats (24 bytes per state). Every update is computed in f64 as with
-    /// `F64` and its result rounded to the nearest f32 when stored.
-    F32,
 }
 
 impl QPrecision {
-    /// Every name, in the order of the docs.
-    pub const NAMES: &'static [&'static str] = &["f64", "f32"];
-
-    /// The name used in scenario files, requests, results and Q-table files.
-    pub fn name(self) -> &'static str {
-        match self {
-            QPrecision::F64 => "f64",
-            QPrecision::F32 => "f32",
-        }
-    }
-
     /// Bytes of one Q-value (8 or 4).
     pub fn value_bytes(self) -> usize {
         match self {
             QPrecision::F64 => 8,
             QPrecision::F32 => 4,
-        }
-    }
-
-    /// The precision of a name (`"f64"`, `"f32"`); the error names `field` and the value
-    /// and lists the names.
-    pub fn from_name(field: &str, name: &str) -> Result<Self> {
-        match name {
-            "f64" => Ok(QPrecision::F64),
-            "f32" => Ok(QPrecision::F32),
-            _ => Err(Error::argument(
-                field,
-                name,
-                format!("must be one of {}", Self::NAMES.join(", ")),
-            )),
-        }
-    }
-}
-
-impl TryFrom<String> for QPrecision {
-    type Error = String;
-    fn try_from(name: String) -> std::result::Result<Self, String> {
-        QPrecision::from_name("learning.q_precision", &name).map_err(|_| {
-            format!(
-                "field `learning.q_precision` = {name}: must be one of {}",
-                Self::NAMES.join(", ")
-            )
-        })
-    }
-}
-
-impl From<QPrecision> for String {
-    fn from(p: QPrecision) -> String {
-        p.name().to_string()
-    }
-}
-
-impl Default for Learning {
-    fn default() -> Self {
-        Learning {
-            alpha: 0.05,
-            gamma: 0.9,
-            epsilon_start: 0.1,
-            epsilon_decay_episodes: 9900,
-            episodes: 10000,
-            max_steps_per_episode: 1000,
-            assist_detour: true,
-            assist_distance: true,
-            seed: 0,
-            initial_q: InitialQ::Zero,
-            q_precision: QPrecision::F64,
         }
     }
 }
@@ -661,7 +685,10 @@ impl Scenario {
             if path == "." {
                 Error::ScenarioParse(e.into_inner().to_string())
             } else {
-                Error::ScenarioParse(format!("field `{path}`: {}", e.into_inner()))
+                // A value outside a named set says `= value: reason` (see `named_enum!`).
+                let msg = e.into_inner().to_string();
+                let sep = if msg.starts_with("= ") { " " } else { ": " };
+                Error::ScenarioParse(format!("field `{path}`{sep}{msg}"))
             }
         })?;
         // Trailing text after the object is an error, as with `serde_json::from_str`.
@@ -869,38 +896,7 @@ impl Scenario {
         ] {
             finite_pos(f, v, true)?;
         }
-        let l = &self.learning;
-        if !(l.alpha > 0.0 && l.alpha <= 1.0) {
-            return Err(Error::invalid(
-                "learning.alpha",
-                l.alpha,
-                "must be in (0, 1]",
-            ));
-        }
-        if !(0.0..=1.0).contains(&l.gamma) {
-            return Err(Error::invalid(
-                "learning.gamma",
-                l.gamma,
-                "must be in [0, 1]",
-            ));
-        }
-        if !(0.0..=1.0).contains(&l.epsilon_start) {
-            return Err(Error::invalid(
-                "learning.epsilon_start",
-                l.epsilon_start,
-                "must be in [0, 1]",
-            ));
-        }
-        if l.episodes == 0 {
-            return Err(Error::invalid("learning.episodes", 0, "must be > 0"));
-        }
-        if l.max_steps_per_episode == 0 {
-            return Err(Error::invalid(
-                "learning.max_steps_per_episode",
-                0,
-                "must be > 0",
-            ));
-        }
+        self.learning.check()?;
         let a = &self.arm;
         if a.dh.len() != 6 {
             return Err(Error::invalid(

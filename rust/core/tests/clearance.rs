@@ -28,7 +28,7 @@ fn naive_centres(points: &ArmPoints, obstacles: &[Cell], cell_mm: f64) -> f64 {
     m
 }
 
-// ---------------------------------------------------------------- SPEC section 1
+// ------------------------------------------- docs/SCENARIOS.md "Units and the arm"
 
 #[test]
 fn beta0_clearance_is_one_cell_with_table_1_obstacles() {

@@ -7,7 +7,7 @@
 use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sixaxis_core::grid::{opposite, Assist, GridWorld, Transition, ACTIONS};
-use sixaxis_core::qlearning::{greedy_path, q_update, train, QTable, TrainOptions};
+use sixaxis_core::qlearning::{greedy_path, q_update, train, Learning, QTable};
 use sixaxis_core::scenario::{Bounds, QPrecision};
 use sixaxis_core::{Cell, Error, Scenario};
 
@@ -293,7 +293,7 @@ fn q_update_by_hand_in_corridor() {
 }
 
 /// The learner of the module docs, written plainly with `GridWorld::step` and `q_update`.
-fn reference_train(world: &GridWorld, o: &TrainOptions, q0: Option<QTable>) -> (QTable, Vec<u32>) {
+fn reference_train(world: &GridWorld, o: &Learning, q0: Option<QTable>) -> (QTable, Vec<u32>) {
     let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
     let mut q = q0.unwrap_or_else(|| QTable::zeros(world.num_states()));
     let mut steps_per_episode = Vec::new();
@@ -314,7 +314,7 @@ fn reference_train(world: &GridWorld, o: &TrainOptions, q0: Option<QTable>) -> (
                     ties[rng.random_range(0..ties.len() as u32) as usize]
                 }
             };
-            let t = world.step(s, a, last, o.assist);
+            let t = world.step(s, a, last, o.assist());
             q_update(&mut q, s, a, &t, o.alpha, o.gamma);
             last = t.collided.then_some(a);
             s = t.next;
@@ -338,9 +338,9 @@ fn learner_matches_plain_reference_bit_for_bit() {
     ] {
         let sc = scenario(name);
         let w = GridWorld::new(&sc).unwrap();
-        let mut o = TrainOptions::from_scenario(&sc);
+        let mut o = Learning::from_scenario(&sc);
         o.seed = seed;
-        o.assist = assist;
+        o.set_assist(assist);
         o.episodes = episodes;
         o.epsilon_decay_episodes = episodes - 50;
         o.max_steps_per_episode = 300;
@@ -359,7 +359,7 @@ fn truncated_episodes_bootstrap_and_terminal_ones_do_not() {
     // among six tied zero actions; whatever it is, the update must bootstrap (no target).
     let sc = corridor();
     let w = GridWorld::new(&sc).unwrap();
-    let mut o = TrainOptions::from_scenario(&sc);
+    let mut o = Learning::from_scenario(&sc);
     o.episodes = 1;
     o.max_steps_per_episode = 1;
     o.epsilon_start = 0.0;
@@ -399,7 +399,7 @@ fn truncated_episodes_bootstrap_and_terminal_ones_do_not() {
 fn same_seed_same_run_different_seed_different_steps() {
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let mut o = TrainOptions::from_scenario(&sc);
+    let mut o = Learning::from_scenario(&sc);
     o.episodes = 2000;
     o.epsilon_decay_episodes = 1980;
     let a = train(&w, &o, None, None).unwrap();
@@ -436,9 +436,9 @@ fn check_path(w: &GridWorld, path: &[Cell]) {
 fn paper_simple_learns_a_path_with_default_10k_episodes() {
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let o = TrainOptions::from_scenario(&sc);
+    let o = Learning::from_scenario(&sc);
     assert_eq!(o.episodes, 10_000);
-    assert_eq!(o.assist, Assist::on());
+    assert_eq!(o.assist(), Assist::on());
     let r = train(&w, &o, None, None).unwrap();
     let path = r
         .path
@@ -474,7 +474,7 @@ fn converged_episode_matches_its_definition() {
     // episode e is that of a run with e + 1 episodes.
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let mut o = TrainOptions::from_scenario(&sc);
+    let mut o = Learning::from_scenario(&sc);
     o.seed = 4;
     let full = train(&w, &o, None, None).unwrap();
     let conv = full.converged_episode.expect("converges") as u32;
@@ -509,9 +509,9 @@ fn report_seeds_0_to_4_on_paper_scenarios() {
                 if assist.detour { "assist" } else { "no assist" }
             );
             for seed in 0..5 {
-                let mut o = TrainOptions::from_scenario(&sc);
+                let mut o = Learning::from_scenario(&sc);
                 o.seed = seed;
-                o.assist = assist;
+                o.set_assist(assist);
                 let r = train(&w, &o, None, None).unwrap();
                 if let Some(p) = &r.path {
                     check_path(&w, p);
@@ -535,7 +535,7 @@ fn report_seeds_0_to_4_on_paper_scenarios() {
 fn progress_is_called_at_most_about_100_times() {
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let mut o = TrainOptions::from_scenario(&sc);
+    let mut o = Learning::from_scenario(&sc);
     for episodes in [1u32, 7, 100, 1234] {
         o.episodes = episodes;
         let calls = std::cell::RefCell::new(Vec::new());
@@ -552,25 +552,25 @@ fn progress_is_called_at_most_about_100_times() {
 fn bad_options_and_wrong_table_are_errors() {
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let o = TrainOptions::from_scenario(&sc);
+    let o = Learning::from_scenario(&sc);
     for bad in [
-        TrainOptions {
+        Learning {
             episodes: 0,
             ..o.clone()
         },
-        TrainOptions {
+        Learning {
             alpha: 0.0,
             ..o.clone()
         },
-        TrainOptions {
+        Learning {
             gamma: 1.5,
             ..o.clone()
         },
-        TrainOptions {
+        Learning {
             epsilon_start: -0.1,
             ..o.clone()
         },
-        TrainOptions {
+        Learning {
             max_steps_per_episode: 0,
             ..o.clone()
         },
@@ -588,17 +588,20 @@ fn bad_options_and_wrong_table_are_errors() {
 
 #[test]
 fn serde_of_options_and_result() {
-    let o = TrainOptions::from_scenario(&scenario("paper_simple"));
+    let o = Learning::from_scenario(&scenario("paper_simple"));
     let text = serde_json::to_string(&o).unwrap();
-    assert!(text.contains("\"assist\":{\"detour\":true,\"distance\":true}"));
-    let back: TrainOptions = serde_json::from_str(&text).unwrap();
+    assert!(
+        text.contains("\"assist_detour\":true,\"assist_distance\":true"),
+        "{text}"
+    );
+    let back: Learning = serde_json::from_str(&text).unwrap();
     assert_eq!(back, o);
     let a: Assist = serde_json::from_str(r#"{"detour":false,"distance":true}"#).unwrap();
     assert_eq!(a, only_distance());
     assert_eq!(Assist::default(), Assist::off());
 
     let w = GridWorld::new(&corridor()).unwrap();
-    let mut o = TrainOptions::from_scenario(&corridor());
+    let mut o = Learning::from_scenario(&corridor());
     o.episodes = 3;
     let r = train(&w, &o, None, None).unwrap();
     let v: serde_json::Value = serde_json::to_value(&r).unwrap();
@@ -637,7 +640,7 @@ fn walled_in_target_has_no_path() {
         .collect();
     let w = GridWorld::with_extra_obstacles(&sc, &walls).unwrap();
     assert_eq!(w.shortest_path(), None);
-    let mut o = TrainOptions::from_scenario(&sc);
+    let mut o = Learning::from_scenario(&sc);
     o.episodes = 50;
     o.max_steps_per_episode = 200;
     let r = train(&w, &o, None, None).unwrap();
@@ -650,7 +653,7 @@ fn walled_in_target_has_no_path() {
 // ---------------------------------------------------------------- Q-table files
 
 fn trained(w: &GridWorld, sc: &Scenario, episodes: u32, seed: u64) -> QTable {
-    let mut o = TrainOptions::from_scenario(sc);
+    let mut o = Learning::from_scenario(sc);
     o.episodes = episodes;
     o.seed = seed;
     train(w, &o, None, None).unwrap().q
@@ -792,7 +795,7 @@ fn qtable_save_is_atomic_and_leaves_nothing_on_error() {
 fn resume_from_saved_table_is_deterministic() {
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let mut first = TrainOptions::from_scenario(&sc);
+    let mut first = Learning::from_scenario(&sc);
     first.episodes = 1500;
     first.epsilon_decay_episodes = 3000;
     first.seed = 11;
@@ -836,7 +839,7 @@ fn resume_continues_learning_to_a_path() {
     // (epsilon from 0.05 down to 0 over 4900 episodes): the path is learned.
     let sc = scenario("paper_simple");
     let w = GridWorld::new(&sc).unwrap();
-    let mut first = TrainOptions::from_scenario(&sc);
+    let mut first = Learning::from_scenario(&sc);
     first.episodes = 5000;
     let r1 = train(&w, &first, None, None).unwrap();
     let mut second = first.clone();
@@ -855,8 +858,8 @@ fn resume_continues_learning_to_a_path() {
 
 // ---------------------------------------------------------------- f32 Q-values
 
-fn f32_options(sc: &Scenario, episodes: u32, seed: u64) -> TrainOptions {
-    let mut o = TrainOptions::from_scenario(sc);
+fn f32_options(sc: &Scenario, episodes: u32, seed: u64) -> Learning {
+    let mut o = Learning::from_scenario(sc);
     o.episodes = episodes;
     o.epsilon_decay_episodes = episodes - episodes / 100;
     o.seed = seed;
@@ -877,7 +880,7 @@ fn f32_learner_matches_plain_reference_bit_for_bit() {
         let sc = scenario(name);
         let w = GridWorld::new(&sc).unwrap();
         let mut o = f32_options(&sc, episodes, seed);
-        o.assist = assist;
+        o.set_assist(assist);
         o.max_steps_per_episode = 300;
         let r = train(&w, &o, None, None).unwrap();
         assert_eq!(r.q.precision(), QPrecision::F32);
@@ -912,7 +915,7 @@ fn f32_training_is_deterministic_and_takes_half_the_bytes() {
     assert!(v32.iter().filter(|v| **v != 0.0).count() > 100);
     let c = train(
         &w,
-        &TrainOptions {
+        &Learning {
             seed: 1,
             ..o.clone()
         },
@@ -924,7 +927,7 @@ fn f32_training_is_deterministic_and_takes_half_the_bytes() {
     // 24 bytes of Q-values per state against 48; the default stays f64.
     let f64_run = train(
         &w,
-        &TrainOptions {
+        &Learning {
             q_precision: QPrecision::F64,
             ..o.clone()
         },
@@ -936,12 +939,9 @@ fn f32_training_is_deterministic_and_takes_half_the_bytes() {
         (a.q.bytes_per_state(), f64_run.q.bytes_per_state()),
         (24, 48)
     );
-    assert_eq!(
-        TrainOptions::from_scenario(&sc).q_precision,
-        QPrecision::F64
-    );
+    assert_eq!(Learning::from_scenario(&sc).q_precision, QPrecision::F64);
     // The f64 learner asked for explicitly is the default learner, bit for bit.
-    let mut default = TrainOptions::from_scenario(&sc);
+    let mut default = Learning::from_scenario(&sc);
     default.episodes = 2000;
     default.epsilon_decay_episodes = 1980;
     assert_eq!(train(&w, &default, None, None).unwrap().q, f64_run.q);

@@ -216,8 +216,9 @@ fn capsules_model_plans_pass_the_capsule_check() {
 
 #[test]
 fn best_clearance_at_target_matches_brute_force() {
-    // SPEC section 2 says about 0.87 cell at (0,3,0) with Table 1's obstacles; the test
-    // asserts what a brute force over the same grid finds, and prints the figure.
+    // docs/SCENARIOS.md "Interpretations taken" states 0.87 cell at (0,3,0) with Table 1's
+    // obstacles; the test asserts what a brute force over the same grid finds, and prints
+    // the figure.
     let s = Scenario::builtin("paper_simple").unwrap();
     let planner = PosePlanner::from_scenario(&s);
     let arm = s.arm();

@@ -4,7 +4,7 @@
 use serde_json::json;
 use sixaxis_core::grid::GridWorld;
 use sixaxis_core::planner::PosePlanner;
-use sixaxis_core::qlearning::{train, TrainOptions};
+use sixaxis_core::qlearning::{train, Learning};
 use sixaxis_core::regrid::regrid;
 use sixaxis_core::replanning::{plan, PlanOptions};
 use sixaxis_core::scenario::{DistanceTo, InitialQ, ObstacleBox, QPrecision};
@@ -118,7 +118,7 @@ fn auto_episodes_find_the_bfs_optimum_at_each_size() {
     for cell in [100.0, 50.0, 25.0] {
         let r = regrid(&s, cell).unwrap();
         let w = GridWorld::new(&r).unwrap();
-        let opts = TrainOptions::from_scenario(&r).auto();
+        let opts = Learning::from_scenario(&r).auto();
         let t = train(&w, &opts, None, None).unwrap();
         let path = t.path.expect("a path");
         assert_eq!(path.len(), w.shortest_path().unwrap().len(), "{cell} mm");
@@ -141,7 +141,7 @@ fn distance_initial_q_finds_the_bfs_optimum(precision: QPrecision) {
     for cell in [100.0, 50.0, 25.0, 12.5] {
         let r = regrid(&s, cell).unwrap();
         let w = GridWorld::new(&r).unwrap();
-        let mut opts = TrainOptions::from_scenario(&r).auto();
+        let mut opts = Learning::from_scenario(&r).auto();
         opts.initial_q = InitialQ::Distance;
         opts.q_precision = precision;
         for seed in [0, 1] {
@@ -183,7 +183,7 @@ fn f32_distance_initial_q_finds_the_bfs_optimum_at_each_size() {
 #[test]
 fn fixed_episodes_stay_the_paper_default() {
     let s = Scenario::builtin("paper_simple").unwrap();
-    let o = TrainOptions::from_scenario(&s);
+    let o = Learning::from_scenario(&s);
     assert!(!o.episodes_auto);
     assert_eq!((o.episodes, o.epsilon_decay_episodes), (10000, 9900));
     assert_eq!(o.initial_q, InitialQ::Zero);

@@ -40,11 +40,11 @@ fn obs_kind(py: Python<'_>, obs: &str) -> PyResult<ObsKind> {
 /// `assist=None|bool` as the core's training request resolves it (None: the scenario's
 /// `learning.assist_*` flags).
 fn assist_of(py: Python<'_>, assist: Option<&Bound<'_, PyAny>>, s: &Scenario) -> PyResult<Assist> {
-    let req = sixaxis_core::request::TrainRequest {
-        assist: crate::request::bool_kw(py, "assist", assist)?,
-        ..Default::default()
-    };
-    Ok(run_attached(py, || req.resolve(s))?.assist)
+    let mut req = sixaxis_core::request::TrainRequest::default();
+    if let Some(a) = crate::request::bool_kw(py, "assist", assist)? {
+        req = req.with("assist", a);
+    }
+    Ok(run_attached(py, || req.resolve(s))?.assist())
 }
 
 #[allow(clippy::too_many_arguments)]

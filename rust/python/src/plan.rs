@@ -10,16 +10,17 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
 use sixaxis_core::generator::{generate, GeneratorOptions};
+use sixaxis_core::options::{Domain, OptionValue};
 use sixaxis_core::replanning::{
     plan as core_plan, BfsLearner, LearnedPath, PathLearner, PlanResult, Round,
 };
-use sixaxis_core::request::{int_domain, LearnerKind, PlanRequest, MAX_REPLANS, SEED};
+use sixaxis_core::request::{plan_options, LearnerKind, PlanRequest};
 use sixaxis_core::scenario::Bounds;
 use sixaxis_core::{Cell, Error as CoreError, GridWorld, Result as CoreResult};
 
 use crate::convert::{cell, json_to_py, repr};
 use crate::errors::{invalid_argument, run, run_attached};
-use crate::request::{int_in, int_kw, train_request};
+use crate::request::{int_in, options_of};
 use crate::scenario::{scenario_from_any, PyScenario};
 
 /// What :func:`plan` returns: the core's ``PlanResult`` (Algorithm 2), read-only.
@@ -238,15 +239,15 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
                 "path" => {}
                 "total_steps" => {
                     out.total_steps =
-                        int_in(py, (&field, 0, u64::MAX as i128), Some(&v))?.map_or(0, |v| v as u64)
+                        int_in(py, &field, &Domain::u64_from(0), Some(&v))?.map_or(0, |v| v as u64)
                 }
                 "converged_episode" => {
                     out.converged_episode =
-                        int_in(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
+                        int_in(py, &field, &Domain::u32_from(0), Some(&v))?.map(|v| v as u32)
                 }
                 "length_converged_episode" => {
                     out.length_converged_episode =
-                        int_in(py, (&field, 0, u32::MAX as i128), Some(&v))?.map(|v| v as u32)
+                        int_in(py, &field, &Domain::u32_from(0), Some(&v))?.map(|v| v as u32)
                 }
                 "wall_time_s" => out.wall_time_s = v.extract()?,
                 _ => {}
@@ -304,44 +305,20 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
 /// is returned with ``success=False`` and a ``failure`` reason; bad arguments raise
 /// :class:`InvalidArgumentError`. The GIL is released while the core works.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, seed=None, episodes=None, episode_cap=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, initial_q=None, q_precision=None, max_replans=None, learner=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (scenario=None, *, learner=None, **options))]
 pub fn plan(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
-    seed: Option<&Bound<'_, PyAny>>,
-    episodes: Option<&Bound<'_, PyAny>>,
-    episode_cap: Option<&Bound<'_, PyAny>>,
-    assist: Option<&Bound<'_, PyAny>>,
-    detour: Option<&Bound<'_, PyAny>>,
-    distance: Option<&Bound<'_, PyAny>>,
-    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
-    initial_q: Option<&Bound<'_, PyAny>>,
-    q_precision: Option<&Bound<'_, PyAny>>,
-    max_replans: Option<&Bound<'_, PyAny>>,
     learner: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyPlanResult> {
     let s = scenario_from_any(py, scenario)?;
-    let mut req = PlanRequest {
-        train: train_request(
-            py,
-            episodes,
-            episode_cap,
-            seed,
-            assist,
-            detour,
-            distance,
-            max_steps_per_episode,
-            initial_q,
-            q_precision,
-        )?,
-        max_replans: int_kw(py, MAX_REPLANS, max_replans)?,
-        learner: None,
-    };
+    let mut req = PlanRequest(options_of(py, "plan", &plan_options(), options)?);
     let mut callable: Option<Py<PyAny>> = None;
     if let Some(l) = learner.filter(|l| !l.is_none()) {
         if let Ok(name) = l.cast::<PyString>() {
-            req.learner = Some(name.to_string());
+            req.0
+                .insert("learner".into(), OptionValue::Text(name.to_string()));
         } else if let Ok(method) = l.getattr("learn_path") {
             callable = Some(method.unbind());
         } else if l.is_callable() {
@@ -443,8 +420,9 @@ pub fn generate_scenario(
     max_attempts: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyScenario> {
     let mut opts = GeneratorOptions::default();
-    let seed = int_in(py, SEED, Some(seed))?
-        .ok_or_else(|| invalid_argument(py, "seed", "None", int_domain(SEED.1, SEED.2)))?
+    let seed_domain = Domain::u64_from(0);
+    let seed = int_in(py, "seed", &seed_domain, Some(seed))?
+        .ok_or_else(|| invalid_argument(py, "seed", "None", seed_domain.reason()))?
         as u64;
     opts.density = finite(py, "density", density)?;
     if let Some(b) = bounds.filter(|b| !b.is_none()) {
@@ -454,8 +432,7 @@ pub fn generate_scenario(
         finite(py, "min_start_target_distance", min_start_target_distance)?;
     opts.require_arm_reachable = require_arm_reachable;
     opts.template = template.to_string();
-    let attempts = ("max_attempts", 1, u32::MAX as i128);
-    if let Some(m) = int_in(py, attempts, max_attempts)? {
+    if let Some(m) = int_in(py, "max_attempts", &Domain::u32_from(1), max_attempts)? {
         opts.max_attempts = m as u32;
     }
     let s = run(py, || generate(&opts, seed))?;

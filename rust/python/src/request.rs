@@ -1,28 +1,37 @@
-//! Python keywords -> the core's requests ([`sixaxis_core::request`]): only the conversion
-//! of each value's Python type happens here; ranges, defaults and the rules that combine
-//! keywords are the core's, shared with the `sixaxis` CLI.
+//! Python keywords -> the core's options ([`sixaxis_core::options`],
+//! [`sixaxis_core::request`]): the keywords are the keys of the core's tables, and only the
+//! conversion of each value's Python type happens here; ranges, defaults and the rules that
+//! combine keywords are the core's, shared with the `sixaxis` CLI.
 
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyInt, PyString};
-use sixaxis_core::request::{
-    in_domain, int_domain, TrainRequest, EPISODES, EPISODE_CAP, MAX_STEPS, SEED,
-};
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString};
+use sixaxis_core::options::{Domain, OptionInfo, OptionValue, Options};
+use sixaxis_core::request::{plan_options, train_options, TrainRequest};
+use sixaxis_core::Scenario;
 
 use crate::convert::repr;
-use crate::errors::invalid_argument;
+use crate::errors::{invalid_argument, run_attached};
 
-/// An integer keyword (bools and non-integers rejected with the core's words), or `None`.
+fn is_numpy_bool(o: &Bound<'_, PyAny>) -> bool {
+    o.get_type()
+        .name()
+        .map(|n| n == "bool" || n == "bool_")
+        .unwrap_or(false)
+}
+
+/// An integer keyword (bools and non-integers rejected with the domain's words), or `None`.
 pub fn int_kw(
     py: Python<'_>,
-    domain: (&str, i128, i128),
+    name: &str,
+    domain: &Domain,
     obj: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<i128>> {
     let Some(o) = obj.filter(|o| !o.is_none()) else {
         return Ok(None);
     };
-    let (name, min, max) = domain;
-    let bad = || invalid_argument(py, name, repr(o), int_domain(min, max));
-    if o.is_instance_of::<PyBool>() {
+    let bad = || invalid_argument(py, name, repr(o), domain.reason());
+    if o.is_instance_of::<PyBool>() || is_numpy_bool(o) {
         return Err(bad());
     }
     // Python ints and integer-like objects (numpy integers) through __index__.
@@ -43,12 +52,7 @@ pub fn bool_kw(
     let Some(o) = obj.filter(|o| !o.is_none()) else {
         return Ok(None);
     };
-    let is_numpy_bool = o
-        .get_type()
-        .name()
-        .map(|n| n == "bool" || n == "bool_")
-        .unwrap_or(false);
-    if o.is_instance_of::<PyBool>() || is_numpy_bool {
+    if o.is_instance_of::<PyBool>() || is_numpy_bool(o) {
         return o.is_truthy().map(Some);
     }
     Err(invalid_argument(
@@ -59,77 +63,175 @@ pub fn bool_kw(
     ))
 }
 
-/// The keywords `train` and `plan` share, as a training request.
-#[allow(clippy::too_many_arguments)]
-pub fn train_request(
+/// The value of one keyword of option `info`, converted by its domain's kind (not yet
+/// checked against the domain: the core does that).
+fn value_of(
     py: Python<'_>,
-    episodes: Option<&Bound<'_, PyAny>>,
-    episode_cap: Option<&Bound<'_, PyAny>>,
-    seed: Option<&Bound<'_, PyAny>>,
-    assist: Option<&Bound<'_, PyAny>>,
-    detour: Option<&Bound<'_, PyAny>>,
-    distance: Option<&Bound<'_, PyAny>>,
-    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
-    initial_q: Option<&Bound<'_, PyAny>>,
-    q_precision: Option<&Bound<'_, PyAny>>,
-) -> PyResult<TrainRequest> {
-    // `episodes="auto"`: train until the greedy path settles (the core's rule).
-    let auto = match episodes {
-        Some(e) if e.is_instance_of::<PyString>() => e.extract::<String>()? == "auto",
-        _ => false,
-    };
-    Ok(TrainRequest {
-        episodes: if auto {
-            None
-        } else {
-            int_kw(py, EPISODES, episodes)?
+    info: &OptionInfo,
+    o: &Bound<'_, PyAny>,
+) -> PyResult<Option<OptionValue>> {
+    if o.is_none() {
+        return Ok(None);
+    }
+    let key = info.key;
+    let bad = || invalid_argument(py, key, repr(o), info.domain.reason());
+    Ok(Some(match info.domain {
+        Domain::Bool => OptionValue::Bool(bool_kw(py, key, Some(o))?.unwrap_or_default()),
+        Domain::Int { .. } => {
+            OptionValue::Int(int_kw(py, key, &info.domain, Some(o))?.unwrap_or_default())
+        }
+        Domain::IntOrAuto { .. } => match o.cast::<PyString>() {
+            Ok(t) => OptionValue::Text(t.to_string()),
+            Err(_) => OptionValue::Int(int_kw(py, key, &info.domain, Some(o))?.unwrap_or_default()),
         },
-        episodes_auto: auto.then_some(true),
-        episode_cap: int_kw(py, EPISODE_CAP, episode_cap)?,
-        seed: int_kw(py, SEED, seed)?,
-        assist: bool_kw(py, "assist", assist)?,
-        detour: bool_kw(py, "detour", detour)?,
-        distance: bool_kw(py, "distance", distance)?,
-        max_steps_per_episode: int_kw(py, MAX_STEPS, max_steps_per_episode)?,
-        initial_q: str_kw(
-            py,
-            "initial_q",
-            initial_q,
-            "must be \"zero\", \"distance\" or None",
-        )?,
-        q_precision: str_kw(
-            py,
-            "q_precision",
-            q_precision,
-            "must be \"f64\", \"f32\" or None",
-        )?,
-    })
+        Domain::Float { .. } => {
+            if o.is_instance_of::<PyBool>() || is_numpy_bool(o) {
+                return Err(bad());
+            }
+            if o.is_instance_of::<PyInt>() {
+                OptionValue::Int(o.extract::<i128>().map_err(|_| bad())?)
+            } else if o.is_instance_of::<PyFloat>() || o.hasattr("__float__")? {
+                OptionValue::Float(o.extract::<f64>().map_err(|_| bad())?)
+            } else {
+                return Err(bad());
+            }
+        }
+        Domain::Choice(_) => match o.cast::<PyString>() {
+            Ok(t) => OptionValue::Text(t.to_string()),
+            Err(_) => return Err(bad()),
+        },
+    }))
 }
 
-/// A string keyword (the core checks the name), or `None`; anything else is rejected with
-/// `reason`.
-pub fn str_kw(
+/// The options of `kwargs` (the keywords of function `function`) as the core's
+/// [`Options`]; a keyword `infos` does not have is a `TypeError`, as Python gives for an
+/// unknown keyword.
+pub fn options_of(
     py: Python<'_>,
-    name: &str,
-    obj: Option<&Bound<'_, PyAny>>,
-    reason: &str,
-) -> PyResult<Option<String>> {
-    match obj.filter(|o| !o.is_none()) {
-        None => Ok(None),
-        Some(o) => match o.cast::<PyString>() {
-            Ok(t) => Ok(Some(t.to_string())),
-            Err(_) => Err(invalid_argument(py, name, repr(o), reason)),
-        },
+    function: &str,
+    infos: &[OptionInfo],
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Options> {
+    let mut out = Options::new();
+    let Some(kwargs) = kwargs else {
+        return Ok(out);
+    };
+    for (k, v) in kwargs.iter() {
+        let key: String = k.extract()?;
+        let Some(info) = infos.iter().find(|i| i.key == key) else {
+            let keys: Vec<&str> = infos.iter().map(|i| i.key).collect();
+            return Err(PyTypeError::new_err(format!(
+                "{function}() got an unexpected keyword argument '{key}' (its options: {})",
+                keys.join(", ")
+            )));
+        };
+        if let Some(value) = value_of(py, info, &v)? {
+            out.insert(key, value);
+        }
     }
+    Ok(out)
+}
+
+/// The keywords of :func:`train` (and `assist` of the envs) as a training request.
+pub fn train_request(
+    py: Python<'_>,
+    function: &str,
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<TrainRequest> {
+    Ok(TrainRequest(options_of(
+        py,
+        function,
+        &train_options(),
+        kwargs,
+    )?))
 }
 
 /// [`int_kw`], then checked against its domain (for keywords no core request resolves).
 pub fn int_in(
     py: Python<'_>,
-    domain: (&str, i128, i128),
+    name: &str,
+    domain: &Domain,
     obj: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<i128>> {
-    int_kw(py, domain, obj)?
-        .map(|v| crate::errors::run_attached(py, || in_domain(domain, v)))
+    int_kw(py, name, domain, obj)?
+        .map(|v| {
+            run_attached(py, || {
+                <u64 as sixaxis_core::options::FromOption>::from_option(
+                    name,
+                    domain,
+                    &OptionValue::Int(v),
+                )
+                .map(|_| v)
+            })
+        })
         .transpose()
+}
+
+fn value_to_py<'py>(py: Python<'py>, v: &OptionValue) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        OptionValue::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+        OptionValue::Int(i) => i.into_pyobject(py)?.into_any(),
+        OptionValue::Float(x) => PyFloat::new(py, *x).into_any(),
+        OptionValue::Text(t) => PyString::new(py, t).into_any(),
+    })
+}
+
+/// The options of :func:`train` (``"train"``) or :func:`plan` (``"plan"``) as a list of
+/// dicts, one per keyword, in the order they apply: ``key``, ``field`` (the scenario field
+/// it overrides, or ``""``), ``kind`` (``int``, ``int|auto``, ``float``, ``bool``,
+/// ``choice``), ``min``/``max`` (numbers), ``choices`` (names), ``unit``, ``doc`` and
+/// ``default`` (what a call that leaves the keyword out gets with ``scenario``, default
+/// ``paper_simple``). The CLI's flags are the same options (``--key-with-dashes``).
+#[pyfunction]
+#[pyo3(signature = (function="train", scenario=None))]
+pub fn options<'py>(
+    py: Python<'py>,
+    function: &str,
+    scenario: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let infos = match function {
+        "train" => train_options(),
+        "plan" => plan_options(),
+        other => {
+            return Err(invalid_argument(
+                py,
+                "function",
+                other,
+                "must be \"train\" or \"plan\"",
+            ))
+        }
+    };
+    let s: Scenario = crate::scenario::scenario_from_any(py, scenario)?
+        .as_ref()
+        .clone();
+    let defaults = sixaxis_core::request::option_values(&s);
+    let out = PyList::empty(py);
+    for i in infos {
+        let d = PyDict::new(py);
+        d.set_item("key", i.key)?;
+        d.set_item("field", i.field)?;
+        d.set_item("kind", i.domain.kind())?;
+        match i.domain {
+            Domain::Int { min, max } | Domain::IntOrAuto { min, max } => {
+                d.set_item("min", min)?;
+                d.set_item("max", max)?;
+            }
+            Domain::Float { min, max, open_min } => {
+                d.set_item("min", min)?;
+                d.set_item("max", max)?;
+                d.set_item("min_exclusive", open_min)?;
+            }
+            Domain::Choice(names) => d.set_item("choices", names.to_vec())?,
+            Domain::Bool => {}
+        }
+        d.set_item("unit", i.unit)?;
+        d.set_item("doc", i.doc_line())?;
+        let default = match defaults.iter().find(|(k, _)| *k == i.key) {
+            Some((_, v)) => value_to_py(py, v)?,
+            _ => py.None().into_bound(py),
+        };
+        d.set_item("default", default)?;
+        out.append(d)?;
+    }
+    Ok(out)
 }

@@ -5,30 +5,24 @@ use std::sync::Mutex;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyString, PyTuple};
-use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable};
+use pyo3::types::{PyDict, PyString, PyTuple};
+use sixaxis_core::options::OptionValue;
+use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable, TrainReport};
 use sixaxis_core::{Cell, GridWorld, Scenario};
 
-use crate::convert::{cell, repr};
+use crate::convert::{cell, json_to_py, repr};
 use crate::errors::{invalid_argument, run, run_attached};
 use crate::request::train_request;
 use crate::scenario::{scenario_from_any, PyScenario};
 
-/// What :func:`train` returns.
+/// What :func:`train` returns. :meth:`to_dict` is the JSON of ``sixaxis train`` (the core's
+/// one serialisation of a run, ``TrainReport``); the getters read the same report.
 #[pyclass(name = "TrainResult", module = "sixaxis_avoid", frozen)]
 pub struct PyTrainResult {
     world: GridWorld,
     scenario: PyScenario,
-    path: Option<Vec<Cell>>,
-    steps_per_episode: Vec<u32>,
-    reached_per_episode: Vec<bool>,
-    converged_episode: Option<u32>,
-    length_converged_episode: Option<u32>,
-    total_steps: u64,
-    wall_time_s: f64,
+    report: TrainReport,
     q: QTable,
-    seed: u64,
-    episodes: u32,
 }
 
 fn cells_array<'py>(py: Python<'py>, cells: &[Cell]) -> Bound<'py, PyArray2<i32>> {
@@ -47,7 +41,8 @@ impl PyTrainResult {
     /// target; ``None`` if the greedy rollout does not reach the target.
     #[getter]
     fn path<'py>(&self, py: Python<'py>) -> PyResult<Option<Vec<Bound<'py, PyTuple>>>> {
-        self.path
+        self.report
+            .path
             .as_ref()
             .map(|p| p.iter().map(|c| PyTuple::new(py, c)).collect())
             .transpose()
@@ -55,50 +50,53 @@ impl PyTrainResult {
     /// The learned path as an ``(k, 3)`` int32 array (empty ``(0, 3)`` if it failed).
     #[getter]
     fn path_array<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i32>> {
-        cells_array(py, self.path.as_deref().unwrap_or(&[]))
+        cells_array(py, self.report.path.as_deref().unwrap_or(&[]))
     }
     /// Whether the learned path reaches the target.
     #[getter]
     fn success(&self) -> bool {
-        self.path.is_some()
+        self.report.reached
     }
     /// Steps of each episode, ``(episodes,)`` uint32.
     #[getter]
     fn steps_per_episode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        PyArray1::from_slice(py, &self.steps_per_episode)
+        PyArray1::from_slice(py, self.report.steps_per_episode.as_deref().unwrap_or(&[]))
     }
     /// Whether each episode reached the target, ``(episodes,)`` bool.
     #[getter]
     fn reached_per_episode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_slice(py, &self.reached_per_episode)
+        PyArray1::from_slice(
+            py,
+            self.report.reached_per_episode.as_deref().unwrap_or(&[]),
+        )
     }
     /// First episode (from 0) from which the greedy path no longer changed; ``None`` if the
     /// final path fails.
     #[getter]
     fn converged_episode(&self) -> Option<u32> {
-        self.converged_episode
+        self.report.converged_episode
     }
     /// First episode (from 0) from which the greedy path's *length* no longer changed (later
     /// changes, if any, swap equally long paths); ``None`` if the final path fails.
     #[getter]
     fn length_converged_episode(&self) -> Option<u32> {
-        self.length_converged_episode
+        self.report.length_converged_episode
     }
     #[getter]
     fn total_steps(&self) -> u64 {
-        self.total_steps
+        self.report.total_steps
     }
     #[getter]
     fn wall_time_s(&self) -> f64 {
-        self.wall_time_s
+        self.report.wall_time_s
     }
     #[getter]
     fn seed(&self) -> u64 {
-        self.seed
+        self.report.seed
     }
     #[getter]
     fn episodes(&self) -> u32 {
-        self.episodes
+        self.report.episodes
     }
     /// The learned Q-table, ``(num_states, 6)``, float64 or float32 as the run's
     /// ``q_precision`` (a copy); row ``s`` is the state of cell ``state_cells[s]``, columns
@@ -134,16 +132,24 @@ impl PyTrainResult {
         let (q, w) = (&self.q, &self.world);
         run(py, || q.save(&path, w))
     }
+    /// The run as a dict: the JSON of ``sixaxis train`` for the same scenario and options
+    /// (with the per-episode curves), field for field.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(&self.report)
+            .map_err(|e| invalid_argument(py, "report", "TrainResult", e.to_string()))?;
+        json_to_py(py, &v)
+    }
     fn __repr__(&self) -> String {
+        let r = &self.report;
         format!(
             "TrainResult(success={}, path_len={}, episodes={}, converged_episode={}, total_steps={}, wall_time_s={:.3})",
-            if self.path.is_some() { "True" } else { "False" },
-            self.path.as_ref().map_or(0, |p| p.len()),
-            self.steps_per_episode.len(),
-            self.converged_episode
+            if r.reached { "True" } else { "False" },
+            r.path.as_ref().map_or(0, |p| p.len()),
+            r.episodes_run,
+            r.converged_episode
                 .map_or_else(|| "None".to_string(), |e| e.to_string()),
-            self.total_steps,
-            self.wall_time_s
+            r.total_steps,
+            r.wall_time_s
         )
     }
 }
@@ -241,53 +247,39 @@ enum Table {
 ///
 /// Same arithmetic and random stream as the core (and the ``sixaxis train`` CLI): for the
 /// same scenario, seed, episodes and assist, path and Q-table values are identical.
-/// Keyword arguments left as ``None`` take the scenario's ``learning`` values; ``assist``
-/// switches eqs. 9 and 10 together, ``detour`` (eq. 9) and ``distance`` (eq. 10) each on its
-/// own (after ``assist``). ``initial_q`` is how the Q-table starts: ``"zero"`` (the
-/// paper's), ``"distance"`` (an optimistic bound from the Manhattan distance to the target,
-/// see docs/SCENARIOS.md), or a ``(num_states, 6)`` float64 or float32 array to resume from
-/// (default the scenario's ``learning.initial_q``). ``q_precision`` is the type of the
-/// Q-values: ``"f64"`` (the default) or ``"f32"`` (half the memory per state; updates are
-/// computed in f64 and stored rounded); a table given as ``initial_q`` is converted to it
-/// (default the scenario's ``learning.q_precision``). ``progress(episodes_done)`` is called
-/// about 100 times; an
-/// exception it raises is re-raised after training. The GIL is released while learning.
+/// ``**options`` are the learning options, one keyword per option of the core's table (the
+/// same as the CLI's flags; :func:`sixaxis_avoid.options` lists them with their domains,
+/// units, docs and defaults): ``episodes`` (a number or ``"auto"``), ``episode_cap``,
+/// ``seed``, ``assist`` (eqs. 9 and 10 together), ``detour`` (eq. 9), ``distance`` (eq. 10),
+/// ``max_steps_per_episode``, ``q_precision``, ``alpha``, ``gamma``, ``epsilon_start``,
+/// ``epsilon_decay_episodes``; one left out or ``None`` takes the scenario's ``learning``
+/// value. ``initial_q`` is how the Q-table starts: ``"zero"`` (the paper's),
+/// ``"distance"`` (an optimistic bound from the Manhattan distance to the target, see
+/// docs/SCENARIOS.md), or a ``(num_states, 6)`` float64 or float32 array to resume from
+/// (converted to the run's ``q_precision``). ``progress(episodes_done)`` is called about 100
+/// times; an exception it raises is re-raised after training. The GIL is released while
+/// learning.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, episodes=None, episode_cap=None, seed=None, assist=None, detour=None, distance=None, max_steps_per_episode=None, extra_obstacles=None, initial_q=None, q_precision=None, progress=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (scenario=None, *, extra_obstacles=None, initial_q=None, progress=None, **options))]
 pub fn train(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
-    episodes: Option<&Bound<'_, PyAny>>,
-    episode_cap: Option<&Bound<'_, PyAny>>,
-    seed: Option<&Bound<'_, PyAny>>,
-    assist: Option<&Bound<'_, PyAny>>,
-    detour: Option<&Bound<'_, PyAny>>,
-    distance: Option<&Bound<'_, PyAny>>,
-    max_steps_per_episode: Option<&Bound<'_, PyAny>>,
     extra_obstacles: Option<&Bound<'_, PyAny>>,
     initial_q: Option<&Bound<'_, PyAny>>,
-    q_precision: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
-    // `initial_q`: a rule by name (the request resolves it) or a table to start from.
-    let (rule, table) = match initial_q.filter(|o| !o.is_none()) {
-        Some(o) if o.is_instance_of::<PyString>() => (Some(o), None),
-        other => (None, other),
+    let mut req = train_request(py, "train", options)?;
+    // `initial_q`: a rule by name (an option like the others) or a table to start from.
+    let table = match initial_q.filter(|o| !o.is_none()) {
+        Some(o) if o.is_instance_of::<PyString>() => {
+            req.0
+                .insert("initial_q".into(), OptionValue::Text(o.extract()?));
+            None
+        }
+        other => other,
     };
-    let req = train_request(
-        py,
-        episodes,
-        episode_cap,
-        seed,
-        assist,
-        detour,
-        distance,
-        max_steps_per_episode,
-        rule,
-        q_precision,
-    )?;
     let opts = run_attached(py, || req.resolve(&s))?;
     let world = world_of(py, &s, extra_obstacles)?;
     let q0 = table
@@ -325,18 +317,11 @@ pub fn train(
     if let Some(e) = cb_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }
+    let report = TrainReport::new(&s, &world, &opts, &result, true);
     Ok(PyTrainResult {
         scenario: PyScenario { inner: s },
-        path: result.path,
-        steps_per_episode: result.steps_per_episode,
-        reached_per_episode: result.reached_per_episode,
-        converged_episode: result.converged_episode,
-        length_converged_episode: result.length_converged_episode,
-        total_steps: result.total_steps,
-        wall_time_s: result.wall_time_s,
+        report,
         q: result.q,
-        seed: opts.seed,
-        episodes: opts.episodes,
         world,
     })
 }
