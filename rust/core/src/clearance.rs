@@ -246,8 +246,8 @@ fn capsule_cube_gap_mm(
 /// every `if` is an element-wise select that maps to `maxpd`/`minpd` (SSE2) or their AVX
 /// forms. The same code is compiled twice, for the baseline target and with AVX
 /// ([`min_d2_avx`]); both give the same bits (no FMA contraction in Rust). Hand-written SSE2
-/// and AVX intrinsics were measured against it and dropped (docs/PERFORMANCE.md, "Eq. 11
-/// kernels").
+/// and AVX intrinsics were measured against it and dropped
+/// (docs/PERFORMANCE.md, "Eq. 11 kernels").
 #[allow(clippy::needless_range_loop)] // lanes of three arrays
 #[inline(always)]
 fn seg_min_d2(xs: &[[f64; LANES]], ys: &[[f64; LANES]], zs: &[[f64; LANES]], s: &Seg) -> f64 {
