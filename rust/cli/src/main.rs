@@ -309,7 +309,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let s = sixaxis_core::regrid::regrid(&Scenario::load(&scenario)?, cell_mm)?;
             emit_text(&(s.to_json() + "\n"), &out)
         }
-        Command::Reproduce { args, out } => emit(&reproduce::run(&args)?, &out),
+        Command::Reproduce { args, out } => emit(
+            &serde_json::to_value(reproduce::run(&args)?).expect("reproduce results serialise"),
+            &out,
+        ),
         Command::Reach { scenario, out } => emit(&reach(&scenario)?, &out),
         Command::Export {
             format,

@@ -81,7 +81,7 @@ pub struct Clearance {
     model: ClearanceModel,
     /// d_p, cells (centres model).
     arm_safe_distance_cells: f64,
-    /// Whether the CPU has AVX (x86_64): picks the 4-wide eq. 11 kernel.
+    /// Whether the CPU has AVX (x86_64): runs the AVX build of the eq. 11 loop.
     avx: bool,
     /// Obstacle boxes in mm (the centres of `centre` boxes are also in `xs`/`ys`/`zs`,
     /// after the `count` cubes).
@@ -241,24 +241,22 @@ fn capsule_cube_gap_mm(
     (segment_cube_distance_mm(&(a - c), &(b - c), half) - r).max(0.0)
 }
 
-/// Eq. 11 kernel, portable version: smallest squared distance (cells²) from the obstacle
-/// centres (chunks of four) to one segment. Same operations, in the same order, as the SSE2
-/// version, so both give the same bits.
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+/// Eq. 11 kernel: smallest squared distance (cells²) from the obstacle centres (chunks of
+/// four) to one segment. Plain Rust that LLVM vectorises: one running minimum per lane, and
+/// every `if` is an element-wise select that maps to `maxpd`/`minpd` (SSE2) or their AVX
+/// forms. The same code is compiled twice, for the baseline target and with AVX
+/// ([`min_d2_avx`]); both give the same bits (no FMA contraction in Rust). Hand-written SSE2
+/// and AVX intrinsics were measured against it and dropped
+/// (docs/PERFORMANCE.md, "Eq. 11 kernels").
 #[allow(clippy::needless_range_loop)] // lanes of three arrays
 #[inline(always)]
-fn seg_min_d2_scalar(
-    xs: &[[f64; LANES]],
-    ys: &[[f64; LANES]],
-    zs: &[[f64; LANES]],
-    s: &Seg,
-) -> f64 {
-    let mut m = f64::INFINITY;
-    for ((xs, ys), zs) in xs.iter().zip(ys).zip(zs) {
+fn seg_min_d2(xs: &[[f64; LANES]], ys: &[[f64; LANES]], zs: &[[f64; LANES]], s: &Seg) -> f64 {
+    let mut acc = [f64::INFINITY; LANES];
+    for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
         for l in 0..LANES {
-            let px = xs[l] - s.a[0];
-            let py = ys[l] - s.a[1];
-            let pz = zs[l] - s.a[2];
+            let px = x4[l] - s.a[0];
+            let py = y4[l] - s.a[1];
+            let pz = z4[l] - s.a[2];
             let dot = px * s.d[0] + py * s.d[1] + pz * s.d[2];
             let w = dot * s.inv_dd;
             let w = if w > 0.0 { w } else { 0.0 };
@@ -267,66 +265,48 @@ fn seg_min_d2_scalar(
             let ey = py - w * s.d[1];
             let ez = pz - w * s.d[2];
             let d2 = ex * ex + ey * ey + ez * ez;
-            if d2 < m {
-                m = d2;
+            acc[l] = if d2 < acc[l] { d2 } else { acc[l] };
+        }
+    }
+    let lo = if acc[0] < acc[2] { acc[0] } else { acc[2] };
+    let hi = if acc[1] < acc[3] { acc[1] } else { acc[3] };
+    if lo < hi {
+        lo
+    } else {
+        hi
+    }
+}
+
+/// Smallest squared distance (cells²) from the obstacle centres to the polyline `points`
+/// (mm, scaled to cells by `scale`); stops early once the minimum so far is `<= stop`.
+#[inline(always)]
+fn min_d2_segments(
+    xs: &[[f64; LANES]],
+    ys: &[[f64; LANES]],
+    zs: &[[f64; LANES]],
+    points: &ArmPoints,
+    scale: f64,
+    stop: f64,
+) -> f64 {
+    let mut m = f64::INFINITY;
+    let mut used = false;
+    for k in 0..8 {
+        let Some(s) = Seg::pick(points, k, scale, used) else {
+            continue;
+        };
+        used = true;
+        let d2 = seg_min_d2(xs, ys, zs, &s);
+        if d2 < m {
+            m = d2;
+            if m <= stop {
+                break;
             }
         }
     }
     m
 }
 
-/// Eq. 11 kernel with SSE2 (part of the x86_64 baseline, so no run-time detection is
-/// needed): two obstacles per instruction.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn seg_min_d2_sse2(xs: &[[f64; LANES]], ys: &[[f64; LANES]], zs: &[[f64; LANES]], s: &Seg) -> f64 {
-    use std::arch::x86_64::*;
-    // SAFETY: SSE2 is always available on x86_64; every load reads two f64 of a [f64; 4]
-    // at offset 0 or 2 (unaligned loads).
-    #[allow(unused_unsafe)]
-    unsafe {
-        let (ax, ay, az) = (
-            _mm_set1_pd(s.a[0]),
-            _mm_set1_pd(s.a[1]),
-            _mm_set1_pd(s.a[2]),
-        );
-        let (dx, dy, dz) = (
-            _mm_set1_pd(s.d[0]),
-            _mm_set1_pd(s.d[1]),
-            _mm_set1_pd(s.d[2]),
-        );
-        let inv = _mm_set1_pd(s.inv_dd);
-        let zero = _mm_setzero_pd();
-        let one = _mm_set1_pd(1.0);
-        let mut acc = _mm_set1_pd(f64::INFINITY);
-        for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
-            for half in [0usize, 2] {
-                let px = _mm_sub_pd(_mm_loadu_pd(x4.as_ptr().add(half)), ax);
-                let py = _mm_sub_pd(_mm_loadu_pd(y4.as_ptr().add(half)), ay);
-                let pz = _mm_sub_pd(_mm_loadu_pd(z4.as_ptr().add(half)), az);
-                let dot = _mm_add_pd(
-                    _mm_add_pd(_mm_mul_pd(px, dx), _mm_mul_pd(py, dy)),
-                    _mm_mul_pd(pz, dz),
-                );
-                // maxpd/minpd return the second operand on NaN, like the scalar `if`s.
-                let w = _mm_min_pd(_mm_max_pd(_mm_mul_pd(dot, inv), zero), one);
-                let ex = _mm_sub_pd(px, _mm_mul_pd(w, dx));
-                let ey = _mm_sub_pd(py, _mm_mul_pd(w, dy));
-                let ez = _mm_sub_pd(pz, _mm_mul_pd(w, dz));
-                let d2 = _mm_add_pd(
-                    _mm_add_pd(_mm_mul_pd(ex, ex), _mm_mul_pd(ey, ey)),
-                    _mm_mul_pd(ez, ez),
-                );
-                acc = _mm_min_pd(d2, acc);
-            }
-        }
-        let hi = _mm_unpackhi_pd(acc, acc);
-        _mm_cvtsd_f64(_mm_min_sd(acc, hi))
-    }
-}
-
-/// Eq. 11 kernel with AVX: four obstacles per instruction; the same operations in the same
-/// order as the other kernels (no FMA), so the same bits.
+/// [`min_d2_segments`] compiled with AVX (four obstacles per instruction instead of two).
 ///
 /// # Safety
 /// The CPU must support AVX (checked once in [`Clearance::new`]).
@@ -340,62 +320,7 @@ unsafe fn min_d2_avx(
     scale: f64,
     stop: f64,
 ) -> f64 {
-    use std::arch::x86_64::*;
-    let mut m = f64::INFINITY;
-    let mut used = false;
-    for k in 0..8 {
-        let Some(s) = Seg::pick(points, k, scale, used) else {
-            continue;
-        };
-        used = true;
-        // SAFETY: AVX is enabled on this function; loads read one whole [f64; 4].
-        #[allow(unused_unsafe)]
-        let d2min = unsafe {
-            let (ax, ay, az) = (
-                _mm256_set1_pd(s.a[0]),
-                _mm256_set1_pd(s.a[1]),
-                _mm256_set1_pd(s.a[2]),
-            );
-            let (dx, dy, dz) = (
-                _mm256_set1_pd(s.d[0]),
-                _mm256_set1_pd(s.d[1]),
-                _mm256_set1_pd(s.d[2]),
-            );
-            let inv = _mm256_set1_pd(s.inv_dd);
-            let zero = _mm256_setzero_pd();
-            let one = _mm256_set1_pd(1.0);
-            let mut acc = _mm256_set1_pd(f64::INFINITY);
-            for ((x4, y4), z4) in xs.iter().zip(ys).zip(zs) {
-                let px = _mm256_sub_pd(_mm256_loadu_pd(x4.as_ptr()), ax);
-                let py = _mm256_sub_pd(_mm256_loadu_pd(y4.as_ptr()), ay);
-                let pz = _mm256_sub_pd(_mm256_loadu_pd(z4.as_ptr()), az);
-                let dot = _mm256_add_pd(
-                    _mm256_add_pd(_mm256_mul_pd(px, dx), _mm256_mul_pd(py, dy)),
-                    _mm256_mul_pd(pz, dz),
-                );
-                let w = _mm256_min_pd(_mm256_max_pd(_mm256_mul_pd(dot, inv), zero), one);
-                let ex = _mm256_sub_pd(px, _mm256_mul_pd(w, dx));
-                let ey = _mm256_sub_pd(py, _mm256_mul_pd(w, dy));
-                let ez = _mm256_sub_pd(pz, _mm256_mul_pd(w, dz));
-                let d2 = _mm256_add_pd(
-                    _mm256_add_pd(_mm256_mul_pd(ex, ex), _mm256_mul_pd(ey, ey)),
-                    _mm256_mul_pd(ez, ez),
-                );
-                acc = _mm256_min_pd(d2, acc);
-            }
-            let lo = _mm256_castpd256_pd128(acc);
-            let hi = _mm256_extractf128_pd(acc, 1);
-            let two = _mm_min_pd(lo, hi);
-            _mm_cvtsd_f64(_mm_min_sd(two, _mm_unpackhi_pd(two, two)))
-        };
-        if d2min < m {
-            m = d2min;
-            if m <= stop {
-                break;
-            }
-        }
-    }
-    m
+    min_d2_segments(xs, ys, zs, points, scale, stop)
 }
 
 /// The links of the capsules model: the polyline's segments, zero-length ones left out (such
@@ -413,7 +338,7 @@ fn all_finite(points: &ArmPoints) -> bool {
     points.iter().all(|p| p.iter().all(|x| x.is_finite()))
 }
 
-/// Whether the 4-wide AVX kernel can run here.
+/// Whether the AVX build of the eq. 11 loop can run here.
 fn cpu_has_avx() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -552,30 +477,13 @@ impl Clearance {
             return f64::NAN;
         }
         let scale = 1.0 / self.cell_mm;
+        let (xs, ys, zs) = (&self.xs[..], &self.ys[..], &self.zs[..]);
         #[cfg(target_arch = "x86_64")]
         if self.avx {
             // SAFETY: `avx` is true only when the CPU supports AVX.
-            return unsafe { min_d2_avx(&self.xs, &self.ys, &self.zs, points, scale, stop) };
+            return unsafe { min_d2_avx(xs, ys, zs, points, scale, stop) };
         }
-        let mut m = f64::INFINITY;
-        let mut used = false;
-        for k in 0..8 {
-            let Some(s) = Seg::pick(points, k, scale, used) else {
-                continue;
-            };
-            used = true;
-            #[cfg(target_arch = "x86_64")]
-            let d2 = seg_min_d2_sse2(&self.xs, &self.ys, &self.zs, &s);
-            #[cfg(not(target_arch = "x86_64"))]
-            let d2 = seg_min_d2_scalar(&self.xs, &self.ys, &self.zs, &s);
-            if d2 < m {
-                m = d2;
-                if m <= stop {
-                    break;
-                }
-            }
-        }
-        m
+        min_d2_segments(xs, ys, zs, points, scale, stop)
     }
 
     /// Centres model (eq. 11): smallest distance from any obstacle centre to any of the 7
@@ -710,42 +618,101 @@ impl Clearance {
 mod tests {
     use super::*;
     use crate::kinematics::PAPER_BETA0_DEG;
+    use std::f64::consts::PI;
 
-    /// The AVX, SSE2 and portable kernels give the same bits.
+    /// Eq. 11 as a plain scalar loop with one running minimum: the test's reference.
+    fn reference_d2(c: &Clearance, p: &ArmPoints) -> f64 {
+        let mut m = f64::INFINITY;
+        for w in p.windows(2) {
+            let s = Seg::new(&w[0], &w[1], 1.0 / c.cell_mm);
+            for ((x4, y4), z4) in c.xs.iter().zip(&c.ys).zip(&c.zs) {
+                for l in 0..LANES {
+                    let (px, py, pz) = (x4[l] - s.a[0], y4[l] - s.a[1], z4[l] - s.a[2]);
+                    let w = ((px * s.d[0] + py * s.d[1] + pz * s.d[2]) * s.inv_dd).clamp(0.0, 1.0);
+                    let (ex, ey, ez) = (px - w * s.d[0], py - w * s.d[1], pz - w * s.d[2]);
+                    m = m.min(ex * ex + ey * ey + ez * ez);
+                }
+            }
+        }
+        m
+    }
+
+    /// `pose` under the AVX build (when the CPU has AVX) and the baseline build of the eq. 11
+    /// loop, and the scalar reference: the same bits.
+    fn assert_builds_agree(with_avx: &Clearance, p: &ArmPoints, what: &str) {
+        let mut without = with_avx.clone();
+        without.avx = false;
+        let a = with_avx.clearance_cells(p);
+        assert_eq!(a.to_bits(), without.clearance_cells(p).to_bits(), "{what}");
+        if with_avx.boxes.is_empty() {
+            assert_eq!(
+                reference_d2(with_avx, p).sqrt().to_bits(),
+                a.to_bits(),
+                "{what}"
+            );
+        }
+        assert_eq!(
+            with_avx.pose_is_clear(p),
+            without.pose_is_clear(p),
+            "{what}"
+        );
+    }
+
     #[test]
     fn kernels_agree_bit_for_bit() {
         let s = Scenario::builtin("paper_simple").unwrap();
         let arm = s.arm();
         let with_avx = Clearance::from_scenario(&s);
-        let mut without = with_avx.clone();
-        without.avx = false;
+        assert_eq!(with_avx.avx, cpu_has_avx());
         let b0 = PAPER_BETA0_DEG.map(f64::to_radians);
         for k in 0..300 {
             let mut q = b0;
             for (i, x) in q.iter_mut().enumerate() {
                 *x += ((k * 7 + i * 5) % 29) as f64 * 0.2 - 2.8;
             }
-            let p = arm.points_mm(&q);
-            let a = with_avx.clearance_cells(&p);
-            let b = without.clearance_cells(&p);
-            assert_eq!(a.to_bits(), b.to_bits(), "pose {k}");
-            let mut m = f64::INFINITY;
-            for w in p.windows(2) {
-                let seg = Seg::new(&w[0], &w[1], 0.01);
-                m = m.min(seg_min_d2_scalar(
-                    &with_avx.xs,
-                    &with_avx.ys,
-                    &with_avx.zs,
-                    &seg,
-                ));
-            }
-            assert_eq!(m.sqrt().to_bits(), a.to_bits(), "pose {k}");
-            assert_eq!(with_avx.pose_is_clear(&p), without.pose_is_clear(&p));
+            assert_builds_agree(&with_avx, &arm.points_mm(&q), &format!("pose {k}"));
         }
         // A polyline collapsed to one point.
         let p = [Vector3::new(0.0, 100.0, 200.0); 8];
         assert!((with_avx.clearance_cells(&p) - 1.0).abs() < 1e-12);
-        assert_eq!(with_avx.clearance_cells(&p), without.clearance_cells(&p));
+        assert_builds_agree(&with_avx, &p, "one point");
+    }
+
+    /// Random worlds (0..=41 obstacle cells, so every padding of the last chunk, and some
+    /// `centre` boxes) and random poses. The same test compared this loop with the
+    /// hand-written AVX and SSE2 kernels it replaced, bit for bit, before they were removed.
+    #[test]
+    fn kernels_agree_bit_for_bit_on_random_inputs() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let arm = Scenario::builtin("paper_simple").unwrap().arm();
+        let mut clear = 0;
+        for world in 0..60 {
+            let cells: Vec<Cell> = (0..world % 42)
+                .map(|_| std::array::from_fn(|_| rng.random_range(-8..=8)))
+                .collect();
+            let boxes: Vec<ObstacleBox> = (0..world % 3)
+                .map(|_| {
+                    let lo: [f64; 3] = std::array::from_fn(|_| rng.random_range(-800.0..700.0));
+                    ObstacleBox {
+                        min_mm: lo,
+                        max_mm: lo.map(|v| v + rng.random_range(1.0..200.0)),
+                        distance_to: DistanceTo::Centre,
+                    }
+                })
+                .collect();
+            let cell_mm = rng.random_range(20.0..150.0);
+            let c =
+                Clearance::new(&cells, cell_mm, ClearanceModel::Centres, 0.76).with_boxes(&boxes);
+            for k in 0..50 {
+                let q: Joints = std::array::from_fn(|_| rng.random_range(-PI..PI));
+                let p = arm.points_mm(&q);
+                clear += usize::from(c.pose_is_clear(&p));
+                assert_builds_agree(&c, &p, &format!("world {world}, pose {k}"));
+            }
+        }
+        // Both answers occur, so the early exit of `pose_is_clear` is exercised too.
+        assert!(clear > 100 && clear < 2900, "{clear} of 3000 poses clear");
     }
 
     #[test]
