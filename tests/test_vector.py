@@ -12,9 +12,9 @@ N = 6
 CAP = 12
 
 
-def _native(scenario, **kw):
+def _native(scenario, env_id="SixAxisAvoid-v0", **kw):
     return gym.make_vec(
-        "SixAxisAvoid-v0",
+        env_id,
         num_envs=N,
         vectorization_mode="vector_entry_point",
         scenario=scenario,
@@ -41,15 +41,19 @@ def test_make_vec_gives_native_env(paper_simple):
 
 
 @pytest.mark.parametrize(
-    ("obs_type", "random_target"),
-    [("vector", False), ("vector", True), ("index", False), ("goal", True)],
+    ("env_id", "kw"),
+    [
+        ("SixAxisAvoid-v0", {"obs_type": "vector", "random_target": False}),
+        ("SixAxisAvoid-v0", {"obs_type": "vector", "random_target": True}),
+        ("SixAxisAvoid-v0", {"obs_type": "index", "random_target": False}),
+        ("SixAxisAvoidGoal-v0", {"random_target": True}),
+    ],
 )
-def test_native_matches_single_envs_step_for_step(near_target, obs_type, random_target):
-    kw = {"obs_type": obs_type, "random_target": random_target}
-    native = _native(near_target, **kw)
+def test_native_matches_single_envs_step_for_step(near_target, env_id, kw):
+    random_target = kw["random_target"]
+    native = _native(near_target, env_id, **kw)
     singles = [
-        gym.make("SixAxisAvoid-v0", scenario=near_target, max_episode_steps=CAP, **kw)
-        for _ in range(N)
+        gym.make(env_id, scenario=near_target, max_episode_steps=CAP, **kw) for _ in range(N)
     ]
     rng = np.random.default_rng(5)
 
