@@ -23,6 +23,7 @@ Needs the ``sb3`` extra (``pip install "sixaxis-avoid[sb3]"``).
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Sequence
 from typing import Any
 
@@ -64,7 +65,7 @@ def _vector_env_class(env_id: Any) -> tuple[type[SixAxisAvoidVectorEnv], dict[st
         raise invalid("env_id", env_id, "must be one of " + ", ".join(repr(i) for i in ours))
     spec = gym.spec(env_id)
     module, name = str(spec.vector_entry_point).split(":")
-    cls = getattr(__import__(module, fromlist=[name]), name)
+    cls = getattr(importlib.import_module(module), name)
     return cls, dict(spec.kwargs)
 
 
