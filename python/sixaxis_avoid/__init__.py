@@ -49,10 +49,8 @@ from sixaxis_avoid._core import (
     train,
     unreachable_cells,
 )
-from sixaxis_avoid._goal import GOAL_ENV_ID
+from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
 
-ENV_ID = "SixAxisAvoid-v0"
-ARM_ENV_ID = "SixAxisAvoidArm-v0"
 #: Step cap of the registrations: the default scenario's ``learning.max_steps_per_episode``.
 MAX_EPISODE_STEPS = Scenario().max_steps_per_episode
 

@@ -16,9 +16,8 @@ import numpy as np
 
 from sixaxis_avoid import _core
 from sixaxis_avoid._checks import invalid
+from sixaxis_avoid._ids import GOAL_ENV_ID
 
-#: Id of the goal-conditioned env.
-GOAL_ENV_ID = "SixAxisAvoidGoal-v0"
 #: The achieved goal (the terminal's normalised cell) in a vector observation.
 ACHIEVED = slice(*_core.VECTOR_OBS_TERMINAL)
 #: The desired goal (the target's normalised cell) in a vector observation.

@@ -30,9 +30,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-import sixaxis_avoid
 from sixaxis_avoid._checks import check_bool, check_choice, invalid
 from sixaxis_avoid._deps import require
+from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
 from sixaxis_avoid.env import check_render_size
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
@@ -60,7 +60,7 @@ _STATELESS_METHODS = ("compute_reward", "cell_of", "state_of", "goal_to_cell")
 
 def _vector_env_class(env_id: Any) -> tuple[type[SixAxisAvoidVectorEnv], dict[str, Any]]:
     """The native vector env class and default keywords of one of our Gymnasium ids."""
-    ours = (sixaxis_avoid.ENV_ID, sixaxis_avoid.ARM_ENV_ID, sixaxis_avoid.GOAL_ENV_ID)
+    ours = (ENV_ID, ARM_ENV_ID, GOAL_ENV_ID)
     if env_id not in ours:
         raise invalid("env_id", env_id, "must be one of " + ", ".join(repr(i) for i in ours))
     spec = gym.spec(env_id)
@@ -106,7 +106,7 @@ class SixAxisVecEnv(VecEnv):
         self,
         n_envs: int,
         seed: int | None = None,
-        env_id: str = sixaxis_avoid.ENV_ID,
+        env_id: str = ENV_ID,
         **env_kwargs: Any,
     ):
         render_mode = env_kwargs.pop("render_mode", None)
