@@ -17,15 +17,15 @@ VARIANTS = [
     ("SixAxisAvoid-v0", {"obs_type": "vector"}),
     ("SixAxisAvoid-v0", {"obs_type": "vector", "random_target": True}),
     ("SixAxisAvoid-v0", {"obs_type": "index"}),
-    ("SixAxisAvoid-v0", {"obs_type": "goal"}),
-    ("SixAxisAvoid-v0", {"obs_type": "goal", "random_target": True}),
+    ("SixAxisAvoidGoal-v0", {}),
+    ("SixAxisAvoidGoal-v0", {"random_target": True}),
     ("SixAxisAvoid-v0", {"assist": False, "reward_scale": 1e-4}),
 ]
 if hasattr(sa._core, "unreachable_cells"):
     VARIANTS += [
         ("SixAxisAvoidArm-v0", {"obs_type": "vector"}),
         ("SixAxisAvoidArm-v0", {"obs_type": "index"}),
-        ("SixAxisAvoidArm-v0", {"obs_type": "goal", "random_target": True}),
+        ("SixAxisAvoidGoal-v0", {"arm_aware": True, "random_target": True}),
     ]
 
 ACTIONS = {(1, 0, 0): 0, (-1, 0, 0): 1, (0, 1, 0): 2, (0, -1, 0): 3, (0, 0, 1): 4, (0, 0, -1): 5}
@@ -137,17 +137,25 @@ def _same(a, b):
     return a == b
 
 
-@pytest.mark.parametrize("obs_type", ["vector", "index", "goal"])
-def test_seeded_determinism(obs_type, near_target):
-    kwargs = {"obs_type": obs_type, "scenario": near_target, "max_episode_steps": 12}
-    if obs_type != "index":
+@pytest.mark.parametrize(
+    ("env_id", "obs_kw"),
+    [
+        (sa.ENV_ID, {"obs_type": "vector"}),
+        (sa.ENV_ID, {"obs_type": "index"}),
+        (sa.GOAL_ENV_ID, {}),
+    ],
+)
+def test_seeded_determinism(env_id, obs_kw, near_target):
+    kwargs = {**obs_kw, "scenario": near_target, "max_episode_steps": 12}
+    index = obs_kw.get("obs_type") == "index"
+    if not index:
         kwargs["random_target"] = True
     actions = np.random.default_rng(0).integers(0, 6, size=300)
-    a = _rollout(gym.make("SixAxisAvoid-v0", **kwargs), 7, actions)
-    b = _rollout(gym.make("SixAxisAvoid-v0", **kwargs), 7, actions)
+    a = _rollout(gym.make(env_id, **kwargs), 7, actions)
+    b = _rollout(gym.make(env_id, **kwargs), 7, actions)
     assert _same(a, b)
-    if obs_type != "index":
-        c = _rollout(gym.make("SixAxisAvoid-v0", **kwargs), 8, actions)
+    if not index:
+        c = _rollout(gym.make(env_id, **kwargs), 8, actions)
         assert not _same(a, c)
 
 
@@ -170,9 +178,7 @@ def test_random_target_draws_are_seeded_and_spread(paper_simple):
 
 @pytest.mark.parametrize("random_target", [False, True])
 def test_compute_reward_matches_step_rewards(near_target, random_target):
-    env = gym.make(
-        "SixAxisAvoid-v0", obs_type="goal", random_target=random_target, scenario=near_target
-    ).unwrapped
+    env = gym.make(sa.GOAL_ENV_ID, random_target=random_target, scenario=near_target).unwrapped
     env.reset(seed=3)
     rng = np.random.default_rng(1)
     ach, des, infos, rewards = [], [], [], []
@@ -260,3 +266,124 @@ def test_arm_aware_blocks_cells_no_clear_pose_reaches(paper_simple):
     assert info["collided"] and env.cell == n  # no clear arm pose there: a collision
     *_, info = plain.step(action)
     assert not info["collided"] and plain.cell == u  # the terminal alone may go there
+
+
+def _goal_rollout(env, seed, steps):
+    """Random actions: per step the goals, info and reward ``step`` returned."""
+    env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    ach, des, infos, rewards = [], [], [], []
+    for a in rng.integers(0, 6, size=steps):
+        obs, reward, term, _, info = env.step(int(a))
+        ach.append(obs["achieved_goal"])
+        des.append(obs["desired_goal"])
+        infos.append(info)
+        rewards.append(reward)
+        if term:
+            env.reset()
+    return np.array(ach), np.array(des), infos, np.array(rewards)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"random_target": True},
+        {"random_target": True, "assist": False, "reward_scale": 1e-4},
+        {"random_target": True, "assist": None, "reward_scale": 0.37},
+        {"arm_aware": True, "random_target": True, "reward_scale": 3.0},
+    ],
+)
+def test_compute_reward_is_the_step_reward_bit_for_bit(paper_simple, kwargs):
+    """Random rollouts: the core's relabelled reward of a step's own goals is its reward,
+    to the bit, one pair at a time and batched (flat and with two leading axes)."""
+    env = gym.make(sa.GOAL_ENV_ID, scenario=paper_simple, **kwargs).unwrapped
+    ach, des, infos, rewards = _goal_rollout(env, 5, 600)
+    assert any(i["collided"] for i in infos)
+    if kwargs.get("assist", True) is not False:  # eq. 9 on: some detour terms to carry over
+        assert any(i["detour_penalty"] < 0 for i in infos)
+    single = np.array([env.compute_reward(a, d, i) for a, d, i in zip(ach, des, infos)])
+    assert isinstance(env.compute_reward(ach[0], des[0], infos[0]), float)
+    batch = env.compute_reward(ach, des, infos)
+    grid = env.compute_reward(
+        ach.reshape(20, 30, 3),
+        des.reshape(20, 30, 3),
+        np.array(infos, dtype=object).reshape(20, 30),
+    )
+    for got in (single, batch, grid.reshape(-1)):
+        assert got.dtype == np.float64
+        np.testing.assert_array_equal(got.view(np.uint64), rewards.view(np.uint64))
+    # The native vector env's compute_reward is the same function of the same model.
+    venv = gym.make_vec(sa.GOAL_ENV_ID, num_envs=2, scenario=paper_simple, **kwargs)
+    np.testing.assert_array_equal(venv.compute_reward(ach, des, infos), rewards)
+
+
+def test_compute_reward_bad_shapes_name_the_argument(near_target):
+    env = gym.make(sa.GOAL_ENV_ID, scenario=near_target).unwrapped
+    obs, info = env.reset(seed=0)
+    g = obs["achieved_goal"]
+    cases = [
+        ((np.zeros((4, 2)), np.zeros((4, 2)), info), "achieved_goal"),
+        ((np.float32(0.5), g, info), "achieved_goal"),
+        ((g, np.zeros((2, 3)), info), "desired_goal"),
+        ((np.zeros((4, 3)), np.zeros((4, 3)), [info] * 3), "info"),
+        ((g, g, 7), "info"),
+        ((np.full(3, 2.0), g, info), "achieved_goal"),  # outside the goal space [-1, 1]
+        ((g, np.full(3, np.nan), info), "desired_goal"),
+        ((["a", "b", "c"], g, info), "achieved_goal"),
+    ]
+    for args, name in cases:
+        with pytest.raises(sa.InvalidArgumentError, match=name) as e:
+            env.compute_reward(*args)
+        assert isinstance(e.value, ValueError)
+
+
+def test_goal_env_is_its_own_id(paper_simple):
+    from sixaxis_avoid.env import SixAxisAvoidEnv, SixAxisAvoidGoalEnv
+
+    spec = gym.spec(sa.GOAL_ENV_ID)
+    assert sa.GOAL_ENV_ID == "SixAxisAvoidGoal-v0"
+    assert spec.max_episode_steps == paper_simple.max_steps_per_episode
+    env = gym.make(sa.GOAL_ENV_ID)
+    assert type(env.unwrapped) is SixAxisAvoidGoalEnv
+    assert isinstance(env.observation_space, gym.spaces.Dict)
+    assert set(env.observation_space) == {"observation", "achieved_goal", "desired_goal"}
+    # The plain ids are plain: no compute_reward, and obs_type="goal" names the goal id.
+    plain = gym.make(sa.ENV_ID).unwrapped
+    assert type(plain) is SixAxisAvoidEnv and not hasattr(plain, "compute_reward")
+    for env_id in (sa.ENV_ID, sa.ARM_ENV_ID):
+        with pytest.raises(sa.InvalidArgumentError, match="SixAxisAvoidGoal-v0") as e:
+            gym.make(env_id, obs_type="goal")
+        assert isinstance(e.value, ValueError) and e.value.name == "obs_type"
+        with pytest.raises(sa.InvalidArgumentError, match="SixAxisAvoidGoal-v0"):
+            gym.make_vec(env_id, num_envs=2, obs_type="goal")
+    with pytest.raises(TypeError, match="obs_type"):
+        gym.make(sa.GOAL_ENV_ID, obs_type="vector")
+    # The goal dict is cut out of the vector observation by the core's layout.
+    obs, _ = env.reset(seed=0)
+    vec = obs["observation"]
+    np.testing.assert_array_equal(obs["achieved_goal"], vec[slice(*sa._core.VECTOR_OBS_TERMINAL)])
+    np.testing.assert_array_equal(obs["desired_goal"], vec[slice(*sa._core.VECTOR_OBS_TARGET)])
+    np.testing.assert_array_equal(
+        env.unwrapped.goal_to_cell(obs["desired_goal"]), paper_simple.target
+    )
+    np.testing.assert_array_equal(
+        env.unwrapped.goal_to_cell(np.stack([obs["achieved_goal"]] * 2)), [paper_simple.start] * 2
+    )
+
+
+def test_core_compute_reward_checks_its_arrays():
+    core = sa._core.EnvCore()
+    g = np.zeros((2, 3))
+    ok = (g, g, np.zeros(2, dtype=bool), np.zeros(2))
+    assert core.compute_reward(*ok).shape == (2,)
+    bad = [
+        ((np.zeros((2, 2)), g, ok[2], ok[3]), "achieved_goal"),
+        ((g, np.zeros((3, 3)), ok[2], ok[3]), "desired_goal"),
+        ((g, g.astype(np.float32), ok[2], ok[3]), "desired_goal"),
+        ((g, g, np.zeros(3, dtype=bool), ok[3]), "collided"),
+        ((g, g, ok[2], np.zeros(1)), "detour_penalty"),
+        ((g, g, ok[2], np.array([0.0, np.inf])), "detour_penalty"),
+    ]
+    for args, name in bad:
+        with pytest.raises(sa.InvalidArgumentError, match=name):
+            core.compute_reward(*args)

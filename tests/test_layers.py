@@ -20,6 +20,8 @@ LAYERS = [
     "sixaxis_avoid._core",
     "sixaxis_avoid._deps",
     "sixaxis_avoid._checks",
+    "sixaxis_avoid._ids",
+    "sixaxis_avoid._goal",
     "sixaxis_avoid._arm",
     "sixaxis_avoid.render",
     "sixaxis_avoid.env",

@@ -37,7 +37,7 @@ def test_human_mode_without_matplotlib_names_the_render_extra(monkeypatch):
 
 def test_check_env_passes_with_the_render_extra():
     check_env(gym.make(sixaxis_avoid.ENV_ID).unwrapped)
-    check_env(gym.make(sixaxis_avoid.ENV_ID, obs_type="goal").unwrapped)
+    check_env(gym.make(sixaxis_avoid.GOAL_ENV_ID).unwrapped)
 
 
 def test_check_env_on_a_plain_install_fails_only_with_the_extra_to_install(monkeypatch):

@@ -33,8 +33,7 @@ def test_dqn_with_her_on_goal_obs(copy_info):
     from stable_baselines3 import HerReplayBuffer
 
     env = gym.make(
-        "SixAxisAvoid-v0",
-        obs_type="goal",
+        "SixAxisAvoidGoal-v0",
         random_target=True,
         reward_scale=1e-4,
         max_episode_steps=50,

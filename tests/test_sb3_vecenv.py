@@ -11,9 +11,9 @@ from stable_baselines3 import A2C, PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecMonitor
 
 
-def dummy(n: int, **kw) -> DummyVecEnv:
+def dummy(n: int, env_id: str = sixaxis_avoid.ENV_ID, **kw) -> DummyVecEnv:
     steps = kw.pop("max_episode_steps", None)
-    return DummyVecEnv([lambda: gym.make(sixaxis_avoid.ENV_ID, max_episode_steps=steps, **kw)] * n)
+    return DummyVecEnv([lambda: gym.make(env_id, max_episode_steps=steps, **kw)] * n)
 
 
 def assert_obs_equal(a, b):
@@ -57,7 +57,7 @@ def toward_target(venv: SixAxisVecEnv, rng: np.random.Generator) -> np.ndarray:
     [
         {"obs_type": "vector", "random_target": True},
         {"obs_type": "index"},
-        {"obs_type": "goal", "random_target": True, "reward_scale": 1e-3},
+        {"env_id": sixaxis_avoid.GOAL_ENV_ID, "random_target": True, "reward_scale": 1e-3},
         {"obs_type": "vector", "assist": False},
     ],
 )
@@ -106,7 +106,9 @@ def test_seed_semantics(near_target):
 
 
 def test_attributes_and_methods(paper_simple):
-    env = SixAxisVecEnv(3, seed=0, scenario=paper_simple, obs_type="goal", reward_scale=1e-4)
+    env = SixAxisVecEnv(
+        3, seed=0, env_id=sixaxis_avoid.GOAL_ENV_ID, scenario=paper_simple, reward_scale=1e-4
+    )
     env.reset()
     assert env.get_attr("scenario") == [paper_simple] * 3
     assert env.get_attr("reward_scale", indices=[1]) == [1e-4]
@@ -117,6 +119,7 @@ def test_attributes_and_methods(paper_simple):
     with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="reward_scale"):
         env.set_attr("reward_scale", 1.0)
     obs, *_ = env.step(np.array([5, 0, 0]))
+    moved = env.get_attr("cell")
     assert env.get_attr("elapsed_steps") == [1, 1, 1]
     assert env.get_attr("cell")[0] == tuple(np.add(paper_simple.start, (0, 0, -1)))
     ((o0, info0),) = env.env_method("reset", indices=0)
@@ -125,14 +128,17 @@ def test_attributes_and_methods(paper_simple):
     assert env.get_attr("elapsed_steps") == [0, 0, 0]
     assert info0["cell"] == tuple(paper_simple.start)
     # HER calls compute_reward through env_method; it equals the single env's.
-    single = gym.make(
-        sixaxis_avoid.ENV_ID, scenario=paper_simple, obs_type="goal", reward_scale=1e-4
-    )
+    single = gym.make(sixaxis_avoid.GOAL_ENV_ID, scenario=paper_simple, reward_scale=1e-4)
     ag, dg = obs["achieved_goal"], obs["desired_goal"]
     infos = [{"collided": False}] * 3
     want = single.unwrapped.compute_reward(ag, dg, infos)
     (got,) = env.env_method("compute_reward", ag, dg, infos, indices=[0])
-    np.testing.assert_allclose(got, want)
+    np.testing.assert_array_equal(got, want)
+    (cells,) = env.env_method("goal_to_cell", ag, indices=[1])
+    assert [tuple(c) for c in cells.tolist()] == moved
+    assert env.env_method("cell_of", 0, indices=[2]) == [single.unwrapped.cell_of(0)]
+    assert env.get_attr("blocked_cells", indices=[0]) == [single.unwrapped.blocked_cells]
+    assert env.get_attr("num_states", indices=[0]) == [single.unwrapped.num_states]
     assert env.env_is_wrapped(VecMonitor) == [False, False, False]
     with pytest.raises(AttributeError, match="no method 'fly'"):
         env.env_method("fly")
@@ -156,6 +162,12 @@ def test_bad_arguments():
         SixAxisVecEnv(0)
     with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="obs_type"):
         SixAxisVecEnv(2, obs_type="pixels")
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="SixAxisAvoidGoal-v0"):
+        SixAxisVecEnv(2, obs_type="goal")
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="env_id"):
+        SixAxisVecEnv(2, env_id="CartPole-v1")
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="render_size"):
+        SixAxisVecEnv(2, render_size=8)
     env = SixAxisVecEnv(2)
     env.reset()
     with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="actions"):
@@ -175,3 +187,39 @@ def test_ppo_and_a2c_train_on_it(algo):
     obs = venv.reset()
     actions, _ = model.predict(obs, deterministic=True)
     assert actions.shape == (4,) and ((0 <= actions) & (actions < 6)).all()
+
+
+def test_only_the_vector_envs_public_api_is_used():
+    """sb3.py reaches no private attribute of the vector env (nor builds a hidden env)."""
+    import ast
+    import inspect
+
+    import sixaxis_avoid.sb3 as sb3
+
+    tree = ast.parse(inspect.getsource(sb3))
+    private = {
+        node.attr
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Attribute)
+        and isinstance(node.value, ast.Attribute)
+        and node.value.attr == "venv"
+        and node.attr.startswith("_")
+    }
+    assert private == set()
+    names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+    assert not names & {"SixAxisAvoidEnv", "SixAxisAvoidGoalEnv", "_core"}
+
+
+def test_arm_aware_id(paper_simple):
+    ours = SixAxisVecEnv(2, seed=1, env_id=sixaxis_avoid.ARM_ENV_ID, max_episode_steps=8)
+    theirs = dummy(2, sixaxis_avoid.ARM_ENV_ID, max_episode_steps=8)
+    theirs.seed(1)
+    assert ours.get_attr("arm_aware") == [True, True]
+    assert ours.get_attr("blocked_cells")[0] == theirs.get_attr("blocked_cells")[0]
+    assert_obs_equal(ours.reset(), theirs.reset())
+    for a in ([0, 1], [2, 3], [4, 5], [5, 5]):
+        o1, r1, _, i1 = ours.step(np.array(a))
+        o2, r2, _, i2 = theirs.step(np.array(a))
+        assert_obs_equal(o1, o2)
+        np.testing.assert_array_equal(r1, r2)
+        assert_infos_equal(i1, i2)

@@ -12,9 +12,9 @@ N = 6
 CAP = 12
 
 
-def _native(scenario, **kw):
+def _native(scenario, env_id="SixAxisAvoid-v0", **kw):
     return gym.make_vec(
-        "SixAxisAvoid-v0",
+        env_id,
         num_envs=N,
         vectorization_mode="vector_entry_point",
         scenario=scenario,
@@ -41,15 +41,19 @@ def test_make_vec_gives_native_env(paper_simple):
 
 
 @pytest.mark.parametrize(
-    ("obs_type", "random_target"),
-    [("vector", False), ("vector", True), ("index", False), ("goal", True)],
+    ("env_id", "kw"),
+    [
+        ("SixAxisAvoid-v0", {"obs_type": "vector", "random_target": False}),
+        ("SixAxisAvoid-v0", {"obs_type": "vector", "random_target": True}),
+        ("SixAxisAvoid-v0", {"obs_type": "index", "random_target": False}),
+        ("SixAxisAvoidGoal-v0", {"random_target": True}),
+    ],
 )
-def test_native_matches_single_envs_step_for_step(near_target, obs_type, random_target):
-    kw = {"obs_type": obs_type, "random_target": random_target}
-    native = _native(near_target, **kw)
+def test_native_matches_single_envs_step_for_step(near_target, env_id, kw):
+    random_target = kw["random_target"]
+    native = _native(near_target, env_id, **kw)
     singles = [
-        gym.make("SixAxisAvoid-v0", scenario=near_target, max_episode_steps=CAP, **kw)
-        for _ in range(N)
+        gym.make(env_id, scenario=near_target, max_episode_steps=CAP, **kw) for _ in range(N)
     ]
     rng = np.random.default_rng(5)
 
@@ -184,3 +188,39 @@ def test_arm_id_vector(paper_simple):
             o, r, te, tr, _ = single.step(actions[i])
             np.testing.assert_array_equal(obs[i], o)
             assert (rew[i], term[i], trunc[i]) == (r, te, tr)
+
+
+def test_public_configuration_and_state(near_target):
+    """What the SB3 VecEnv reads: configuration, per-env state and the single env's
+    stateless methods, as public members equal to the single env's."""
+    from sixaxis_avoid.vector import SixAxisAvoidGoalVectorEnv
+
+    env = _native(near_target, "SixAxisAvoidGoal-v0", random_target=True, reward_scale=0.5)
+    assert isinstance(env, SixAxisAvoidGoalVectorEnv)
+    single = gym.make("SixAxisAvoidGoal-v0", scenario=near_target, random_target=True).unwrapped
+    assert (env.reward_scale, env.random_target, env.arm_aware) == (0.5, True, False)
+    assert env.num_states == single.num_states
+    assert env.blocked_cells == single.blocked_cells and env.extra_obstacles == []
+    obs, info = env.reset(seed=4)
+    singles_obs = [
+        gym.make("SixAxisAvoidGoal-v0", scenario=near_target, random_target=True).reset(seed=4 + i)[
+            0
+        ]
+        for i in range(N)
+    ]
+    # current_targets: each env's own target (the desired goals), not the candidates.
+    np.testing.assert_array_equal(env.goal_to_cell(obs["desired_goal"]), env.current_targets)
+    np.testing.assert_array_equal(
+        env.current_targets, [single.goal_to_cell(o["desired_goal"]) for o in singles_obs]
+    )
+    assert len({tuple(t) for t in env.current_targets.tolist()}) > 1
+    np.testing.assert_array_equal(env.cells, info["cell"])
+    assert env.elapsed_steps.tolist() == [0] * N
+    env.step(np.zeros(N, dtype=np.int64))
+    assert env.elapsed_steps.tolist() == [1] * N
+    assert env.cell_of(0) == single.cell_of(0) and env.state_of(env.cell_of(7)) == 7
+    # The candidates of random targets: the free cells other than the start.
+    candidates = set(single._core.target_candidates)
+    assert {tuple(t) for t in env.current_targets.tolist()} <= candidates
+    assert tuple(near_target.start) not in candidates
+    assert not candidates & set(single.blocked_cells)

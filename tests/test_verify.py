@@ -52,6 +52,49 @@ def test_a_regridded_world_is_verified_against_its_boxes():
     assert r.centre_line_mm < 1.0 and r.contacts > 0
 
 
+def test_verify_uses_the_cores_interpolation_and_eq11(paper_simple_plan):
+    """The motion replayed and eq. 11 are the core's: verify's eq. 11 is the planner's own
+    figure to the bit, and the report keeps the figures it had when verify computed them
+    in NumPy (to 1e-12; the interpolated angles differ from NumPy's by an ulp or so)."""
+    from sixaxis_avoid import _core
+
+    p = paper_simple_plan
+    poses = np.asarray(p.poses_rad)
+    t = p.interpolation_steps
+    for k in range(len(poses) - 1):
+        qs = verify.interpolate(poses[k], poses[k + 1], t)
+        assert qs.shape == (t + 1, 6)
+        np.testing.assert_array_equal(qs, _core.interpolate(poses[k], poses[k + 1], t))
+    r = verify.verify_plan(p, "paper_simple")
+    assert r.eq11_cells == p.min_centre_clearance_cells  # the planner's motion_clearance
+    s = sixaxis_avoid.Scenario("paper_simple")
+    for k, m in enumerate(r.moves):
+        qs = _core.interpolate(poses[k], poses[k + 1], t)
+        assert m.eq11_cells == float(np.min(_core.centres_clearance_cells(s, qs)))
+    # The figures of the NumPy implementation this replaced (paper_simple, seed 0).
+    assert r.eq11_cells == pytest.approx(0.7903176733467716, abs=1e-12)
+    assert r.min_distance_mm == pytest.approx(-29.59997062275642, abs=1e-12)
+    assert r.centre_line_mm == pytest.approx(0.40002937724358034, abs=1e-12)
+    assert r.contacts == 154
+    assert [round(m.eq11_cells, 9) for m in r.moves[:4]] == [0.967012065, 0.814713839, 1.0, 1.0]
+
+
+def test_core_interpolation_and_eq11_check_their_inputs():
+    from sixaxis_avoid import _core
+
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="steps"):
+        _core.interpolate(np.zeros(6), np.ones(6), 0)
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="q1"):
+        _core.interpolate(np.zeros(6), np.ones(5), 4)
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="poses_rad"):
+        _core.centres_clearance_cells("paper_simple", np.zeros((2, 5)))
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="cell_mm"):
+        _core.centres_clearance_cells("paper_simple", np.zeros((1, 6)), -1.0)
+    # No obstacle centres: infinitely far.
+    empty = sixaxis_avoid.Scenario("paper_simple").replace(obstacles=[])
+    assert _core.centres_clearance_cells(empty, np.zeros((2, 6))).tolist() == [np.inf] * 2
+
+
 def test_interpolation_matches_the_planner():
     q0 = np.array([0.9 * np.pi, 0, 0, 0, 0, 0])
     q1 = np.array([-0.9 * np.pi, 0, 0, 0, 0, 1.0])

@@ -1,13 +1,15 @@
 """SixAxisAvoid: a six-axis arm that learns to reach a target through clutter.
 
-Importing the package registers the Gymnasium ids ``SixAxisAvoid-v0`` and
-``SixAxisAvoidArm-v0`` (arm-aware), each with a native Rust-batched vector env::
+Importing the package registers the Gymnasium ids ``SixAxisAvoid-v0``,
+``SixAxisAvoidArm-v0`` (arm-aware) and ``SixAxisAvoidGoal-v0`` (goal-conditioned, for
+hindsight experience replay), each with a native Rust-batched vector env::
 
     import gymnasium as gym
     import sixaxis_avoid
 
     env = gym.make("SixAxisAvoid-v0")
     envs = gym.make_vec("SixAxisAvoid-v0", num_envs=1024)
+    goal_env = gym.make("SixAxisAvoidGoal-v0", random_target=True)
 
 The core (grid world, Q-learning, kinematics) is Rust, in the extension ``sixaxis_avoid._core``.
 Every error of bad input is a :class:`SixAxisError`, itself a ``ValueError``; a caught Rust
@@ -47,21 +49,28 @@ from sixaxis_avoid._core import (
     train,
     unreachable_cells,
 )
+from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
 
-ENV_ID = "SixAxisAvoid-v0"
-ARM_ENV_ID = "SixAxisAvoidArm-v0"
 #: Step cap of the registrations: the default scenario's ``learning.max_steps_per_episode``.
 MAX_EPISODE_STEPS = Scenario().max_steps_per_episode
 
 
+#: The registrations: id -> (env class, native vector env class, default keywords).
+_REGISTRATIONS = {
+    ENV_ID: ("SixAxisAvoidEnv", "SixAxisAvoidVectorEnv", {}),
+    ARM_ENV_ID: ("SixAxisAvoidEnv", "SixAxisAvoidVectorEnv", {"arm_aware": True}),
+    GOAL_ENV_ID: ("SixAxisAvoidGoalEnv", "SixAxisAvoidGoalVectorEnv", {}),
+}
+
+
 def _register() -> None:
-    for env_id, kwargs in ((ENV_ID, {}), (ARM_ENV_ID, {"arm_aware": True})):
+    for env_id, (env_cls, vec_cls, kwargs) in _REGISTRATIONS.items():
         if env_id in gym.registry:
             continue
         gym.register(
             id=env_id,
-            entry_point="sixaxis_avoid.env:SixAxisAvoidEnv",
-            vector_entry_point="sixaxis_avoid.vector:SixAxisAvoidVectorEnv",
+            entry_point=f"sixaxis_avoid.env:{env_cls}",
+            vector_entry_point=f"sixaxis_avoid.vector:{vec_cls}",
             max_episode_steps=MAX_EPISODE_STEPS,
             kwargs=kwargs,
         )
@@ -89,6 +98,7 @@ def make(env_id: str = ENV_ID, scenario: Any = None, **kwargs: Any) -> gym.Env:
 __all__ = [
     "ARM_ENV_ID",
     "ENV_ID",
+    "GOAL_ENV_ID",
     "MAX_EPISODE_STEPS",
     "Arm",
     "InternalError",

@@ -11,6 +11,8 @@ from typing_extensions import Self
 __all__ = [
     "DEFAULT_SCENARIO",
     "VECTOR_OBS_DIM",
+    "VECTOR_OBS_TARGET",
+    "VECTOR_OBS_TERMINAL",
     "Arm",
     "EnvCore",
     "InternalError",
@@ -29,14 +31,16 @@ __all__ = [
     "__version__",
     "_raise_core_error",
     "cells_reachable",
+    "centres_clearance_cells",
     "clear_pose_at",
     "expand_names",
     "export_scenario",
     "generate_scenario",
     "greedy_path_of",
+    "interpolate",
     "load_q",
-    "options",
     "machine",
+    "options",
     "plan",
     "shortest_path",
     "train",
@@ -47,6 +51,8 @@ __all__ = [
 __version__: str
 DEFAULT_SCENARIO: str
 VECTOR_OBS_DIM: int
+VECTOR_OBS_TERMINAL: tuple[int, int]
+VECTOR_OBS_TARGET: tuple[int, int]
 
 _Cell = tuple[int, int, int]
 _CellLike = Sequence[int] | npt.NDArray[np.integer[Any]]
@@ -237,6 +243,12 @@ def clear_pose_at(
 def cells_reachable(
     cells: Iterable[_CellLike], scenario: _ScenarioLike = None
 ) -> npt.NDArray[np.bool_]: ...
+def interpolate(
+    q0: Sequence[float], q1: Sequence[float], steps: int
+) -> npt.NDArray[np.float64]: ...
+def centres_clearance_cells(
+    scenario: _ScenarioLike, poses_rad: npt.NDArray[np.float64], cell_mm: float | None = None
+) -> npt.NDArray[np.float64]: ...
 def _raise_core_error(kind: str) -> None: ...
 
 @final
@@ -273,6 +285,14 @@ class EnvCore:
     def vector_observation(self) -> npt.NDArray[np.float32]: ...
     def cell_of(self, state: int) -> _Cell: ...
     def state_of(self, c: _CellLike) -> int | None: ...
+    def compute_reward(
+        self,
+        achieved_goal: npt.NDArray[np.float64],
+        desired_goal: npt.NDArray[np.float64],
+        collided: npt.NDArray[np.bool_],
+        detour_penalty: npt.NDArray[np.float64],
+    ) -> npt.NDArray[np.float64]: ...
+    def goal_to_cell(self, goal: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]: ...
     scenario: Scenario
     num_states: int
     state: int
@@ -282,7 +302,7 @@ class EnvCore:
     start_cell: _Cell
     obstacles: list[_Cell]
     extra_obstacles: list[_Cell]
-    target_cells: list[_Cell]
+    target_candidates: list[_Cell]
     blocked: npt.NDArray[np.bool_]
     path: list[_Cell]
     start_distance: float
@@ -306,6 +326,16 @@ class VecEnvCore:
     def seed(self, seeds: Sequence[int]) -> None: ...
     def reset(self, mask: npt.NDArray[np.bool_] | None = None) -> None: ...
     def step(self, actions: npt.NDArray[np.int64]) -> None: ...
+    def cell_of(self, state: int) -> _Cell: ...
+    def state_of(self, c: _CellLike) -> int | None: ...
+    def compute_reward(
+        self,
+        achieved_goal: npt.NDArray[np.float64],
+        desired_goal: npt.NDArray[np.float64],
+        collided: npt.NDArray[np.bool_],
+        detour_penalty: npt.NDArray[np.float64],
+    ) -> npt.NDArray[np.float64]: ...
+    def goal_to_cell(self, goal: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]: ...
     num_envs: int
     num_states: int
     max_episode_steps: int
@@ -318,7 +348,13 @@ class VecEnvCore:
     cells: npt.NDArray[np.int32]
     detour_penalty: npt.NDArray[np.float64]
     steps: npt.NDArray[np.uint32]
-    target_cells: npt.NDArray[np.int32]
+    current_targets: npt.NDArray[np.int32]
+    target_candidates: list[_Cell]
+    obstacles: list[_Cell]
+    extra_obstacles: list[_Cell]
+    reward_scale: float
+    random_target: bool
+    assist: tuple[bool, bool]
 
 @final
 class PlanResult:

@@ -1,4 +1,5 @@
-"""The Gymnasium environment ``SixAxisAvoid-v0`` (and ``SixAxisAvoidArm-v0``)."""
+"""The Gymnasium environments ``SixAxisAvoid-v0`` (and ``SixAxisAvoidArm-v0``) and the
+goal-conditioned ``SixAxisAvoidGoal-v0``."""
 
 from __future__ import annotations
 
@@ -18,6 +19,12 @@ from sixaxis_avoid._checks import (
     invalid,
 )
 from sixaxis_avoid._deps import require
+from sixaxis_avoid._goal import (
+    GoalRewards,
+    goal_dict,
+    goal_to_cell,
+    refuse_goal_obs_type,
+)
 
 VECTOR_OBS_DIM = _core.VECTOR_OBS_DIM
 
@@ -38,6 +45,25 @@ def goal_observation_space() -> spaces.Dict:
     return spaces.Dict(
         {"observation": vector_observation_space(), "achieved_goal": goal, "desired_goal": goal}
     )
+
+
+def check_obs_type(obs_type: Any, goal: bool) -> str:
+    """``"vector"`` / ``"index"`` on the plain envs (``"goal"`` names the goal id), ``"goal"``
+    on the goal envs."""
+    if goal:
+        return check_choice("obs_type", obs_type, ("goal",))
+    refuse_goal_obs_type(obs_type)
+    return check_choice("obs_type", obs_type, tuple(t for t in OBS_TYPES if t != "goal"))
+
+
+def check_render_size(render_size: Any) -> int:
+    if (
+        isinstance(render_size, bool)
+        or not isinstance(render_size, int)
+        or not 64 <= render_size <= 4096
+    ):
+        raise invalid("render_size", render_size, "must be an integer in 64..=4096")
+    return render_size
 
 
 def check_random_target(obs_type: str, random_target: bool) -> None:
@@ -91,9 +117,11 @@ class SixAxisAvoidEnv(gym.Env):
       the last step collided.
     - ``"index"``: ``Discrete(num_states)`` — the number of the terminal's cell (row-major
       over x, y, z with z fastest; ``env.unwrapped.cell_of(i)`` converts).
-    - ``"goal"``: ``Dict(observation=Box(13,), achieved_goal=Box(3,), desired_goal=Box(3,))``
-      with the normalised terminal and target cells as goals, and a vectorised
-      :meth:`compute_reward` for hindsight experience replay (SB3's ``HerReplayBuffer``).
+
+    The goal-conditioned variant (``Dict`` observations with achieved and desired goals and
+    a vectorised ``compute_reward`` for hindsight experience replay) is its own id,
+    ``SixAxisAvoidGoal-v0`` (:class:`SixAxisAvoidGoalEnv`); ``obs_type="goal"`` here raises
+    an ``InvalidArgumentError`` that names it.
 
     ## Rewards
 
@@ -126,8 +154,8 @@ class SixAxisAvoidEnv(gym.Env):
 
     ``info`` holds ``collided`` (bool), ``distance_to_target`` (cells), ``cell`` (the
     terminal's cell, a tuple), ``is_success`` (reached the target on this step) and
-    ``detour_penalty`` (eq. 9's part of the reward before scaling, used by
-    :meth:`compute_reward`).
+    ``detour_penalty`` (eq. 9's part of the reward before scaling, used by the goal env's
+    ``compute_reward``).
 
     ## Arguments
 
@@ -138,7 +166,7 @@ class SixAxisAvoidEnv(gym.Env):
     env = gym.make(
         "SixAxisAvoid-v0",
         scenario="paper_simple",  # built-in name, JSON path, dict, Scenario, or None
-        obs_type="vector",  # "vector" | "index" | "goal"
+        obs_type="vector",  # "vector" | "index" (goals: the id "SixAxisAvoidGoal-v0")
         assist=True,  # eqs. 9 and 10 on (False: eq. 5 alone; None: the scenario's flags)
         reward_scale=1.0,  # finite, >= 0
         random_target=False,  # draw the target per episode (needs "vector" or "goal")
@@ -153,17 +181,13 @@ class SixAxisAvoidEnv(gym.Env):
 
     ## Version History
 
-    - v0: initial version.
+    - v0: initial version. The goal-conditioned variant, once ``obs_type="goal"`` of this
+      id, is ``SixAxisAvoidGoal-v0``; ``obs_type="goal"`` raises an error naming it.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 8}
-
-    def __new__(cls, *args: Any, **kwargs: Any):
-        # ``obs_type="goal"`` gives the subclass that has ``compute_reward``: SB3 takes any
-        # env with that method for a goal-conditioned one.
-        if cls is SixAxisAvoidEnv and kwargs.get("obs_type") == "goal":
-            cls = SixAxisAvoidGoalEnv
-        return super().__new__(cls)
+    #: Goal-conditioned (``SixAxisAvoidGoalEnv``): Dict observations and compute_reward.
+    _GOAL: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -177,19 +201,14 @@ class SixAxisAvoidEnv(gym.Env):
         render_arm: bool = False,
         render_size: int = 512,
     ):
-        check_choice("obs_type", obs_type, OBS_TYPES)
+        check_obs_type(obs_type, self._GOAL)
         assist = check_optional_bool("assist", assist)
         reward_scale = check_nonneg_float("reward_scale", reward_scale)
         random_target = check_bool("random_target", random_target)
         arm_aware = check_bool("arm_aware", arm_aware)
         render_arm = check_bool("render_arm", render_arm)
         check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
-        if (
-            isinstance(render_size, bool)
-            or not isinstance(render_size, int)
-            or not 64 <= render_size <= 4096
-        ):
-            raise invalid("render_size", render_size, "must be an integer in 64..=4096")
+        check_render_size(render_size)
         check_random_target(obs_type, random_target)
         if render_mode == "human":
             # Fail at construction, not at the first frame, if Matplotlib is missing.
@@ -214,21 +233,13 @@ class SixAxisAvoidEnv(gym.Env):
             extra_obstacles=extra,
             track_path=render_mode is not None,
         )
-        self._goal = obs_type == "goal"
         self._seeded = False
 
         self.action_space = spaces.Discrete(6)
         self.observation_space = observation_space_of(obs_type, self._core.num_states)
 
-        lo, hi = self.scenario.bounds
-        self._lo = np.asarray(lo, dtype=np.float64)
-        self._span = np.maximum(np.asarray(hi, dtype=np.float64) - self._lo, 1.0)
-        self._start = np.asarray(self.scenario.start, dtype=np.int64)
-        self._rewards = self.scenario.rewards
-        self._assist = self._core.assist
         self._renderer = None
         self._window = None
-        self._warned_info = False
 
     # Gymnasium API ----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -238,16 +249,16 @@ class SixAxisAvoidEnv(gym.Env):
             self._core.seed(int(self.np_random.integers(0, 2**63)))
             self._seeded = True
         obs, info = self._core.reset()
-        if self._goal:
-            obs = self._goal_obs(obs)
+        if self._GOAL:
+            obs = goal_dict(obs)
         if self.render_mode == "human":
             self._render_human()
         return obs, info
 
     def step(self, action):
         obs, reward, terminated, info = self._core.step(action)
-        if self._goal:
-            obs = self._goal_obs(obs)
+        if self._GOAL:
+            obs = goal_dict(obs)
         if self.render_mode == "human":
             self._render_human()
         return obs, reward, terminated, False, info
@@ -269,19 +280,10 @@ class SixAxisAvoidEnv(gym.Env):
             self._window.close()
             self._window = None
 
-    # Goal-conditioned API ---------------------------------------------------------------
-    @staticmethod
-    def _goal_obs(obs: np.ndarray) -> dict[str, np.ndarray]:
-        return {
-            "observation": obs,
-            "achieved_goal": obs[0:3].copy(),
-            "desired_goal": obs[3:6].copy(),
-        }
-
     def goal_to_cell(self, goal: np.ndarray) -> np.ndarray:
-        """Normalised goal(s) ``(..., 3)`` -> integer cells ``(..., 3)``."""
-        g = np.asarray(goal, dtype=np.float64)
-        return np.rint((g + 1.0) * 0.5 * self._span + self._lo).astype(np.int64)
+        """Normalised cell(s) ``(..., 3)`` (as in the vector observation and the goals) ->
+        integer cells ``(..., 3)``."""
+        return goal_to_cell(self._core, goal)
 
     # Introspection ----------------------------------------------------------------------
     @property
@@ -343,64 +345,88 @@ class SixAxisAvoidEnv(gym.Env):
 
 
 class SixAxisAvoidGoalEnv(SixAxisAvoidEnv):
-    """:class:`SixAxisAvoidEnv` with ``obs_type="goal"``: Dict observations and a vectorised
-    :meth:`compute_reward` (``gym.make("SixAxisAvoid-v0", obs_type="goal")`` makes one)."""
+    """The goal-conditioned variant of :class:`SixAxisAvoidEnv` (id ``SixAxisAvoidGoal-v0``):
+    the same grid world, dynamics and rewards, with ``Dict`` observations and a vectorised
+    :meth:`compute_reward` for hindsight experience replay (SB3's ``HerReplayBuffer``).
 
-    def __init__(self, *args: Any, **kwargs: Any):
-        kwargs.setdefault("obs_type", "goal")
-        super().__init__(*args, **kwargs)
-        if self.obs_type != "goal":
-            raise invalid("obs_type", self.obs_type, 'SixAxisAvoidGoalEnv needs obs_type "goal"')
+    ## Observation Space
+
+    ``Dict(observation=Box(13,), achieved_goal=Box(3,), desired_goal=Box(3,))``:
+    ``observation`` is ``SixAxisAvoid-v0``'s vector observation, ``achieved_goal`` the
+    terminal's normalised cell and ``desired_goal`` the target's (both float32 in [-1, 1],
+    the observation's elements 0-2 and 3-5); :meth:`goal_to_cell` converts a goal to its
+    cell. Pass ``random_target=True`` for a target drawn per episode.
+
+    ## Rewards
+
+    As ``SixAxisAvoid-v0``. :meth:`compute_reward` gives the same rewards for relabelled
+    goals, computed in Rust by the step's own code (the core's ``EnvModel::goal_rewards``).
+
+    ## Arguments
+
+    ```python
+    import gymnasium as gym
+    import sixaxis_avoid  # registers the ids
+
+    env = gym.make(
+        "SixAxisAvoidGoal-v0",
+        scenario="paper_simple",
+        random_target=True,
+        arm_aware=False,  # True: the arm-aware world of SixAxisAvoidArm-v0
+        # assist, reward_scale, render_mode, render_arm, render_size: as SixAxisAvoid-v0
+    )
+    ```
+
+    There is no ``obs_type`` keyword: the observation is always the ``Dict``.
+
+    ## Version History
+
+    - v0: initial version (before it had its own id: ``SixAxisAvoid-v0`` with
+      ``obs_type="goal"``).
+    """
+
+    _GOAL: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        scenario: Any = None,
+        assist: bool | None = True,
+        reward_scale: float = 1.0,
+        random_target: bool = False,
+        arm_aware: bool = False,
+        render_mode: str | None = None,
+        render_arm: bool = False,
+        render_size: int = 512,
+    ):
+        super().__init__(
+            scenario,
+            obs_type="goal",
+            assist=assist,
+            reward_scale=reward_scale,
+            random_target=random_target,
+            arm_aware=arm_aware,
+            render_mode=render_mode,
+            render_arm=render_arm,
+            render_size=render_size,
+        )
+        self._goal_rewards = GoalRewards(self._core)
 
     def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray | float:
-        """The step reward for (achieved, desired) goal pairs, vectorised over leading axes.
+        """The step reward for (achieved, desired) goal pairs, vectorised over leading axes
+        (``(3,)`` gives a float, ``(..., 3)`` an array of shape ``...``).
 
-        Equals the reward ``step`` returned when ``achieved_goal`` is the goal reached by
-        that step; with another ``desired_goal`` it is the reward the same move would have
-        earned for that target (HER relabelling). ``info`` is the step's info dict or a
-        sequence of them (its ``collided`` and ``detour_penalty`` are used).
+        Equals, to the bit, the reward ``step`` returned when ``achieved_goal`` is the goal
+        reached by that step; with another ``desired_goal`` it is the reward the same move
+        would have earned for that target (HER relabelling). Computed in Rust by the step's
+        own eqs. 5, 9 and 10. ``info`` is the step's info dict (for every pair) or a sequence
+        of them, one per pair (its ``collided`` and ``detour_penalty`` are used).
 
         SB3's ``HerReplayBuffer`` passes empty info dicts unless made with
         ``replay_buffer_kwargs={"copy_info_dict": True}``; without them the reward is
         computed as if the step had not collided and had no eq. 9 term (a warning says so
         once), which is exact for every transition but collisions and detours.
+
+        Bad shapes raise ``InvalidArgumentError`` naming ``achieved_goal``, ``desired_goal``
+        or ``info``.
         """
-        a = self.goal_to_cell(achieved_goal)
-        d = self.goal_to_cell(desired_goal)
-        shape = a.shape[:-1]
-        infos = [info] if isinstance(info, dict) else list(np.asarray(info, dtype=object).ravel())
-        if len(infos) not in (1, int(np.prod(shape, dtype=np.int64))):
-            raise invalid("info", f"{len(infos)} dicts", f"expected one per goal pair {shape}")
-        if all("collided" in i for i in infos):
-            collided = np.array([bool(i["collided"]) for i in infos])
-            detour = np.array([float(i.get("detour_penalty", 0.0)) for i in infos])
-        else:
-            if not self._warned_info:
-                self._warned_info = True
-                gym.logger.warn(
-                    "compute_reward got info dicts without 'collided': computing the reward "
-                    "as if no step collided. For the exact reward with SB3's HerReplayBuffer "
-                    'pass replay_buffer_kwargs={"copy_info_dict": True}.'
-                )
-            collided = np.zeros(len(infos), dtype=bool)
-            detour = np.zeros(len(infos))
-        if isinstance(info, dict) or len(infos) == 1:
-            collided, detour = collided[0], detour[0]
-        else:
-            collided, detour = collided.reshape(shape), detour.reshape(shape)
-        r = self._rewards
-        reached = np.all(a == d, axis=-1)
-        reward = np.where(
-            collided,
-            -r["collision_penalty"],
-            np.where(reached, r["target_reward"], -r["step_penalty"]),
-        ).astype(np.float64)
-        detour_on, distance_on = self._assist
-        if distance_on:
-            d_t = np.sqrt(np.sum((d - a) ** 2, axis=-1).astype(np.float64))
-            d_o = np.sqrt(np.sum((d - self._start) ** 2, axis=-1).astype(np.float64))
-            reward = reward + r["distance_reward"] * (d_o - d_t)
-        if detour_on:
-            reward = reward + detour
-        reward = reward * self.reward_scale
-        return reward if reward.ndim else float(reward)
+        return self._goal_rewards(achieved_goal, desired_goal, info)

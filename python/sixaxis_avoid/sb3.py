@@ -10,18 +10,30 @@ N envs in one Rust call and gives SB3 its own semantics::
     venv = SixAxisVecEnv(8, seed=0, reward_scale=1e-4, max_episode_steps=200)
     model = PPO("MlpPolicy", venv, n_steps=256, seed=0).learn(50_000)
 
+For hindsight experience replay pass ``env_id="SixAxisAvoidGoal-v0"``: ``env_method`` then
+runs the goal env's ``compute_reward``.
+
+It drives the native vector env (:class:`~sixaxis_avoid.vector.SixAxisAvoidVectorEnv`)
+through its public API only: ``reset``/``step`` (with ``copy=False``, so its buffers are
+read without copies), ``reset(options={"reset_mask": ...})`` for the envs whose episode
+ended, and its documented configuration and per-env state.
+
 Needs the ``sb3`` extra (``pip install "sixaxis-avoid[sb3]"``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+import importlib
+from collections.abc import Sequence
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from sixaxis_avoid._checks import check_bool, check_choice, invalid
 from sixaxis_avoid._deps import require
+from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
+from sixaxis_avoid.env import check_render_size
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
 _vec_env = require("stable_baselines3.common.vec_env", "sixaxis_avoid.sb3")
@@ -46,16 +58,30 @@ _STATE_ATTRS = ("cell", "target_cell", "elapsed_steps", "path")
 _STATELESS_METHODS = ("compute_reward", "cell_of", "state_of", "goal_to_cell")
 
 
+def _vector_env_class(env_id: Any) -> tuple[type[SixAxisAvoidVectorEnv], dict[str, Any]]:
+    """The native vector env class and default keywords of one of our Gymnasium ids."""
+    ours = (ENV_ID, ARM_ENV_ID, GOAL_ENV_ID)
+    if env_id not in ours:
+        raise invalid("env_id", env_id, "must be one of " + ", ".join(repr(i) for i in ours))
+    spec = gym.spec(env_id)
+    module, name = str(spec.vector_entry_point).split(":")
+    cls = getattr(importlib.import_module(module), name)
+    return cls, dict(spec.kwargs)
+
+
 class SixAxisVecEnv(VecEnv):
-    """``n_envs`` copies of ``SixAxisAvoid-v0`` as one Stable-Baselines3 ``VecEnv``.
+    """``n_envs`` copies of ``SixAxisAvoid-v0`` (or another of our ids, ``env_id``) as one
+    Stable-Baselines3 ``VecEnv``.
 
-    ``env_kwargs`` are the keywords of ``gym.make("SixAxisAvoid-v0", ...)`` (``scenario``,
-    ``obs_type``, ``assist``, ``reward_scale``, ``random_target``, ``arm_aware``,
-    ``render_mode`` (``None`` or ``"rgb_array"``), ``render_arm``, ``render_size``) plus
-    ``max_episode_steps`` (default: the scenario's ``learning.max_steps_per_episode``).
+    ``env_id`` is ``"SixAxisAvoid-v0"`` (default), ``"SixAxisAvoidArm-v0"`` or
+    ``"SixAxisAvoidGoal-v0"``; ``env_kwargs`` are the keywords of ``gym.make(env_id, ...)``
+    (``scenario``, ``obs_type`` (not for the goal id), ``assist``, ``reward_scale``,
+    ``random_target``, ``arm_aware``, ``render_mode`` (``None`` or ``"rgb_array"``),
+    ``render_arm``, ``render_size``) plus ``max_episode_steps`` (default: the scenario's
+    ``learning.max_steps_per_episode``).
 
-    Step for step the same as ``DummyVecEnv([lambda: gym.make("SixAxisAvoid-v0", **kw)] *
-    n_envs)`` seeded alike: an env whose episode ends is reset at once and its returned
+    Step for step the same as ``DummyVecEnv([lambda: gym.make(env_id, **kw)] * n_envs)``
+    seeded alike: an env whose episode ends is reset at once and its returned
     observation is the new episode's first; ``infos[i]`` holds the single env's info
     (``collided``, ``distance_to_target``, ``cell``, ``is_success``, ``detour_penalty``),
     ``"TimeLimit.truncated"`` (the step cap ended the episode, not the target) and, when the
@@ -71,33 +97,36 @@ class SixAxisVecEnv(VecEnv):
     ``set_attr`` stores per-env attributes of your own but refuses the configuration, which
     all envs share in one Rust object (make a new ``SixAxisVecEnv`` instead).
     ``env_method`` runs ``reset`` and ``render`` for the chosen envs, and the single env's
-    stateless methods (``compute_reward`` for HER, ``cell_of``, ``state_of``,
-    ``goal_to_cell``). ``env_is_wrapped`` is ``False``: no Gymnasium wrapper is involved.
+    stateless methods (``compute_reward`` for HER on the goal id, ``cell_of``, ``state_of``,
+    ``goal_to_cell``), which the native vector env provides for all its envs.
+    ``env_is_wrapped`` is ``False``: no Gymnasium wrapper is involved.
     """
 
-    def __init__(self, n_envs: int, seed: int | None = None, **env_kwargs: Any):
+    def __init__(
+        self,
+        n_envs: int,
+        seed: int | None = None,
+        env_id: str = ENV_ID,
+        **env_kwargs: Any,
+    ):
         render_mode = env_kwargs.pop("render_mode", None)
         check_choice("render_mode", render_mode, (None, "rgb_array"))
         self.render_arm = check_bool("render_arm", env_kwargs.pop("render_arm", False))
-        self._render_size = env_kwargs.pop("render_size", 512)
-        self._env_kwargs = dict(env_kwargs)
-        self.venv = SixAxisAvoidVectorEnv(num_envs=n_envs, copy=False, **env_kwargs)
+        render_size = env_kwargs.pop("render_size", 512)
+        # Checked now, as the single env does, though only rendering uses it.
+        self._render_size = check_render_size(render_size)
+        cls, defaults = _vector_env_class(env_id)
+        self.env_id = env_id
+        self.venv = cls(num_envs=n_envs, copy=False, **{**defaults, **env_kwargs})
         v = self.venv
-        self._core = v._core
         self.render_mode = render_mode
         self._user_attrs: list[dict[str, Any]] = [{} for _ in range(v.num_envs)]
-        self._single = None
         self._renderers: dict[int, Any] = {}
         self._paths: list[list[tuple[int, int, int]]] | None = None
-        if render_mode is not None:
-            # Validate render_size now, as the single env does.
-            self._single_env()
         super().__init__(v.num_envs, v.single_observation_space, v.single_action_space)
         self.metadata = {"render_modes": ["rgb_array"] if render_mode else [], "render_fps": 8}
-        self._goal = v.obs_type == "goal"
         self._index = v.obs_type == "index"
         self._actions: np.ndarray | None = None
-        self._obs_buf = self._core.observations
         if seed is not None:
             self.seed(seed)
 
@@ -114,51 +143,39 @@ class SixAxisVecEnv(VecEnv):
     def max_episode_steps(self) -> int:
         return self.venv.max_episode_steps
 
-    def _single_env(self):
-        """A single env of the same configuration (for its stateless methods)."""
-        if self._single is None:
-            from sixaxis_avoid.env import SixAxisAvoidEnv
-
-            kw = {k: v for k, v in self._env_kwargs.items() if k != "max_episode_steps"}
-            self._single = SixAxisAvoidEnv(
-                **kw,
-                render_mode=None,
-                render_arm=self.render_arm,
-                render_size=self._render_size,
-            )
-        return self._single
-
     # Observations and infos -------------------------------------------------------------
-    def _obs(self, obs: np.ndarray):
-        if self._goal:
-            return {
-                "observation": obs,
-                "achieved_goal": obs[:, 0:3].copy(),
-                "desired_goal": obs[:, 3:6].copy(),
-            }
-        return obs
+    # The native vector env's observations are an array or (goal id) a dict of arrays.
+    @staticmethod
+    def _copy(obs):
+        if isinstance(obs, dict):
+            return {k: v.copy() for k, v in obs.items()}
+        return obs.copy()
 
-    def _obs_row(self, obs: np.ndarray, i: int):
+    @staticmethod
+    def _set_rows(dst, src, idx: np.ndarray) -> None:
+        if isinstance(dst, dict):
+            for k in dst:
+                dst[k][idx] = src[k][idx]
+        else:
+            dst[idx] = src[idx]
+
+    def _obs_row(self, obs, i: int):
+        if isinstance(obs, dict):
+            return {k: v[i].copy() for k, v in obs.items()}
         if self._index:
             return int(obs[i])
-        row = obs[i].copy()
-        if self._goal:
-            return {
-                "observation": row,
-                "achieved_goal": row[0:3].copy(),
-                "desired_goal": row[3:6].copy(),
-            }
-        return row
+        return obs[i].copy()
 
-    def _infos(self, idx: Iterable[int] | None = None) -> list[dict[str, Any]]:
-        """The single env's info dicts of envs ``idx`` (all if None), from the core's buffers."""
-        c = self._core
-        idx = range(self.num_envs) if idx is None else list(idx)
-        collided = c.collided[idx].tolist()
-        distance = c.distance_to_target[idx].tolist()
-        cells = c.cells[idx].tolist()
-        success = c.terminated[idx].tolist()
-        detour = c.detour_penalty[idx].tolist()
+    @staticmethod
+    def _infos(info: dict[str, Any], idx: Sequence[int] | None = None) -> list[dict[str, Any]]:
+        """The single env's info dicts of envs ``idx`` (all if None), from the vector env's
+        info (a dict of arrays)."""
+        idx = slice(None) if idx is None else list(idx)
+        collided = info["collided"][idx].tolist()
+        distance = info["distance_to_target"][idx].tolist()
+        cells = info["cell"][idx].tolist()
+        success = info["is_success"][idx].tolist()
+        detour = info["detour_penalty"][idx].tolist()
         return [
             {
                 "collided": collided[k],
@@ -171,20 +188,23 @@ class SixAxisVecEnv(VecEnv):
         ]
 
     # VecEnv API -------------------------------------------------------------------------
+    def _reset_envs(self, mask: np.ndarray):
+        """Reset the envs where ``mask`` is true: their observations (the vector env's
+        buffers) and info."""
+        return self.venv.reset(options={"reset_mask": mask})
+
     def reset(self):
         seeds = self._seeds
-        if any(s is not None for s in seeds):
-            # Env i's generator is seeded exactly as a single env's reset(seed=seeds[i]).
-            self.venv._seed(list(seeds))
-        else:
-            self.venv._seed(None)  # random seeds on the first reset, else keep the generators
-        self._core.reset(None)
-        self.reset_infos = self._infos()
+        # Env i's generator is seeded exactly as a single env's reset(seed=seeds[i]); without
+        # seeds the vector env draws random ones on the first reset, else keeps its generators.
+        seed = list(seeds) if any(s is not None for s in seeds) else None
+        obs, info = self.venv.reset(seed=seed)
+        self.reset_infos = self._infos(info)
         self._reset_seeds()
         self._reset_options()
         if self.render_mode is not None:
-            self._paths = [[tuple(cell)] for cell in self._core.cells.tolist()]
-        return self._obs(self._obs_buf.copy())
+            self._paths = [[i["cell"]] for i in self.reset_infos]
+        return self._copy(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = self.venv.actions_array(actions)
@@ -192,15 +212,16 @@ class SixAxisVecEnv(VecEnv):
     def step_wait(self):
         if self._actions is None:
             raise invalid("actions", None, "step_wait() needs a step_async(actions) first")
-        c = self._core
-        c.step(self._actions)
+        step_obs, step_rewards, step_terminated, step_truncated, step_info = self.venv.step(
+            self._actions
+        )
         self._actions = None
-        obs = self._obs_buf.copy()
-        rewards = c.rewards.astype(np.float32)
-        terminated = c.terminated.copy()
-        truncated = c.truncated.copy()
+        obs = self._copy(step_obs)
+        rewards = step_rewards.astype(np.float32)
+        terminated = step_terminated.copy()
+        truncated = step_truncated.copy()
         dones = terminated | truncated
-        infos = self._infos()
+        infos = self._infos(step_info)
         time_limit = (truncated & ~terminated).tolist()
         for i, info in enumerate(infos):
             info["TimeLimit.truncated"] = time_limit[i]
@@ -210,13 +231,13 @@ class SixAxisVecEnv(VecEnv):
             done = np.flatnonzero(dones)
             for i in done:
                 infos[i]["terminal_observation"] = self._obs_row(obs, int(i))
-            c.reset(dones)
-            obs[done] = self._obs_buf[done]
-            for i, info in zip(done, self._infos(done)):
+            new_obs, new_info = self._reset_envs(dones)
+            self._set_rows(obs, new_obs, done)
+            for i, info in zip(done, self._infos(new_info, done)):
                 self.reset_infos[i] = info
                 if self._paths is not None:
                     self._paths[i] = [info["cell"]]
-        return self._obs(obs), rewards, dones, infos
+        return obs, rewards, dones, infos
 
     def _track_paths(self, infos: Sequence[dict[str, Any]]) -> None:
         for path, info in zip(self._paths, infos):
@@ -246,13 +267,13 @@ class SixAxisVecEnv(VecEnv):
         if name == "render_arm":
             return self.render_arm
         if name in ("reward_scale", "random_target", "arm_aware", "num_states", "blocked_cells"):
-            return getattr(self._single_env(), name)
+            return getattr(self.venv, name)
         if name == "cell":
-            return tuple(self._core.cells[i].tolist())
+            return tuple(self.venv.cells[i].tolist())
         if name == "target_cell":
-            return tuple(self._core.target_cells[i].tolist())
+            return tuple(self.venv.current_targets[i].tolist())
         if name == "elapsed_steps":
-            return int(self._core.steps[i])
+            return int(self.venv.elapsed_steps[i])
         if name == "path" and self._paths is not None:
             return list(self._paths[i])
         if name == "metadata":
@@ -286,9 +307,8 @@ class SixAxisVecEnv(VecEnv):
         if method_name == "reset":
             mask = np.zeros(self.num_envs, dtype=bool)
             mask[idx] = True
-            self._core.reset(mask)
-            infos = self._infos(idx)
-            obs = self._obs_buf
+            obs, info = self._reset_envs(mask)
+            infos = self._infos(info, idx)
             for i, info in zip(idx, infos):
                 self.reset_infos[i] = info
                 if self._paths is not None:
@@ -296,8 +316,8 @@ class SixAxisVecEnv(VecEnv):
             return [(self._obs_row(obs, i), info) for i, info in zip(idx, infos)]
         if method_name == "get_wrapper_attr":
             return [self._env_attr(method_args[0], i) for i in idx]
-        if method_name in _STATELESS_METHODS:
-            fn = getattr(self._single_env(), method_name)
+        if method_name in _STATELESS_METHODS and hasattr(self.venv, method_name):
+            fn = getattr(self.venv, method_name)
             return [fn(*method_args, **method_kwargs) for _ in idx]
         raise AttributeError(
             f"SixAxisVecEnv envs have no method {method_name!r} (they have: render, reset, "
@@ -317,17 +337,14 @@ class SixAxisVecEnv(VecEnv):
 
             r = SceneRenderer(
                 self.scenario,
-                self._core_extra(),
+                self.venv.extra_obstacles,
                 size=self._render_size,
                 render_arm=self.render_arm,
             )
             self._renderers[i] = r
-        cell = tuple(self._core.cells[i].tolist())
+        cell = tuple(self.venv.cells[i].tolist())
         path = self._paths[i] if self._paths is not None else [cell]
-        return r.frame(path, cell, tuple(self._core.target_cells[i].tolist()))
-
-    def _core_extra(self) -> list[tuple[int, int, int]]:
-        return self._single_env()._core.extra_obstacles
+        return r.frame(path, cell, tuple(self.venv.current_targets[i].tolist()))
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         return [self._frame(i) for i in range(self.num_envs)]

@@ -1,4 +1,5 @@
-"""The native vector env: N copies of ``SixAxisAvoid-v0`` stepped in one Rust call."""
+"""The native vector envs: N copies of ``SixAxisAvoid-v0`` (or ``SixAxisAvoidGoal-v0``)
+stepped in one Rust call."""
 
 from __future__ import annotations
 
@@ -12,15 +13,19 @@ from gymnasium.vector.utils import batch_space
 
 from sixaxis_avoid import _arm, _core
 from sixaxis_avoid._checks import (
-    OBS_TYPES,
     check_bool,
-    check_choice,
     check_nonneg_float,
     check_optional_bool,
     check_positive_int,
     invalid,
 )
-from sixaxis_avoid.env import as_scenario, check_random_target, observation_space_of
+from sixaxis_avoid._goal import GoalRewards, goal_dict, goal_to_cell
+from sixaxis_avoid.env import (
+    as_scenario,
+    check_obs_type,
+    check_random_target,
+    observation_space_of,
+)
 
 
 class SixAxisAvoidVectorEnv(VectorEnv):
@@ -41,14 +46,23 @@ class SixAxisAvoidVectorEnv(VectorEnv):
     only the envs where ``mask`` is true.
 
     ``info`` holds arrays ``collided``, ``distance_to_target``, ``cell`` (``(N, 3)`` int32),
-    ``is_success`` and ``detour_penalty``, each with its ``_key`` mask (all true). Observation types
-    ``"vector"``, ``"index"`` and ``"goal"``; no rendering.
+    ``is_success`` and ``detour_penalty``, each with its ``_key`` mask (all true). Observation
+    types ``"vector"`` and ``"index"`` (goals: :class:`SixAxisAvoidGoalVectorEnv`); no
+    rendering.
+
+    Besides Gymnasium's API, the configuration (``scenario``, ``obs_type``, ``reward_scale``,
+    ``random_target``, ``arm_aware``, ``max_episode_steps``, ``num_states``,
+    ``blocked_cells``, ``extra_obstacles``), each env's state (``cells``,
+    ``current_targets``, ``elapsed_steps``) and the single env's stateless methods
+    (``cell_of``, ``state_of``, ``goal_to_cell``) are public.
     """
 
     metadata: ClassVar[dict[str, Any]] = {
         "autoreset_mode": AutoresetMode.NEXT_STEP,
         "render_modes": [],
     }
+    #: Goal-conditioned (``SixAxisAvoidGoalVectorEnv``).
+    _GOAL: ClassVar[bool] = False
 
     def __init__(
         self,
@@ -64,7 +78,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         copy: bool = True,
     ):
         num_envs = check_positive_int("num_envs", num_envs)
-        check_choice("obs_type", obs_type, OBS_TYPES)
+        check_obs_type(obs_type, self._GOAL)
         assist = check_optional_bool("assist", assist)
         reward_scale = check_nonneg_float("reward_scale", reward_scale)
         random_target = check_bool("random_target", random_target)
@@ -86,6 +100,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         self.obs_type = obs_type
         self.render_mode = None
         self.max_episode_steps = max_episode_steps
+        self.arm_aware = arm_aware
         extra = _arm.unreachable_cells(self.scenario) if arm_aware else None
         self._core = _core.VecEnvCore(
             self.scenario,
@@ -134,13 +149,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
 
     def _observations(self):
         obs = self._result(self._obs)
-        if self.obs_type == "goal":
-            return {
-                "observation": obs,
-                "achieved_goal": obs[:, 0:3],
-                "desired_goal": obs[:, 3:6],
-            }
-        return obs
+        return goal_dict(obs) if self._GOAL else obs
 
     def _info(self) -> dict[str, Any]:
         m = self._mask
@@ -203,7 +212,95 @@ class SixAxisAvoidVectorEnv(VectorEnv):
     def close_extras(self, **kwargs: Any) -> None:
         pass
 
+    # Configuration ----------------------------------------------------------------------
     @property
-    def target_cells(self) -> np.ndarray:
-        """Each env's target cell, ``(N, 3)``."""
-        return self._core.target_cells
+    def reward_scale(self) -> float:
+        return self._core.reward_scale
+
+    @property
+    def random_target(self) -> bool:
+        return self._core.random_target
+
+    @property
+    def num_states(self) -> int:
+        return self._core.num_states
+
+    @property
+    def blocked_cells(self) -> list[tuple[int, int, int]]:
+        """Obstacles, then (arm-aware) the cells no clear arm pose reaches."""
+        return self._core.obstacles
+
+    @property
+    def extra_obstacles(self) -> list[tuple[int, int, int]]:
+        """The arm-aware blocked cells (empty unless ``arm_aware``)."""
+        return self._core.extra_obstacles
+
+    # Each env's state -------------------------------------------------------------------
+    @property
+    def cells(self) -> np.ndarray:
+        """Each env's terminal cell, ``(N, 3)`` int32 (a copy)."""
+        return self._cells.copy()
+
+    @property
+    def current_targets(self) -> np.ndarray:
+        """Each env's current target cell, ``(N, 3)`` int32."""
+        return self._core.current_targets
+
+    @property
+    def elapsed_steps(self) -> np.ndarray:
+        """Steps since each env's reset, ``(N,)``."""
+        return self._core.steps
+
+    # The single env's stateless methods ------------------------------------------------
+    def cell_of(self, state: int) -> tuple[int, int, int]:
+        """The cell of an ``"index"`` observation."""
+        return self._core.cell_of(int(state))
+
+    def state_of(self, cell) -> int | None:
+        """The ``"index"`` observation of a cell (None outside bounds)."""
+        return self._core.state_of(cell)
+
+    def goal_to_cell(self, goal: np.ndarray) -> np.ndarray:
+        """Normalised cell(s) ``(..., 3)`` -> integer cells ``(..., 3)``."""
+        return goal_to_cell(self._core, goal)
+
+
+class SixAxisAvoidGoalVectorEnv(SixAxisAvoidVectorEnv):
+    """``num_envs`` copies of :class:`~sixaxis_avoid.env.SixAxisAvoidGoalEnv`
+    (``gym.make_vec("SixAxisAvoidGoal-v0", num_envs=N)``): :class:`SixAxisAvoidVectorEnv`
+    with batched ``Dict`` observations (``observation`` ``(N, 13)``, ``achieved_goal`` and
+    ``desired_goal`` ``(N, 3)``) and the single env's :meth:`compute_reward`. Same keywords
+    as :class:`SixAxisAvoidVectorEnv` without ``obs_type``."""
+
+    _GOAL: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        scenario: Any = None,
+        assist: bool | None = True,
+        reward_scale: float = 1.0,
+        random_target: bool = False,
+        arm_aware: bool = False,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        copy: bool = True,
+    ):
+        super().__init__(
+            num_envs,
+            scenario,
+            obs_type="goal",
+            assist=assist,
+            reward_scale=reward_scale,
+            random_target=random_target,
+            arm_aware=arm_aware,
+            max_episode_steps=max_episode_steps,
+            render_mode=render_mode,
+            copy=copy,
+        )
+        self._goal_rewards = GoalRewards(self._core)
+
+    def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray | float:
+        """As :meth:`SixAxisAvoidGoalEnv.compute_reward
+        <sixaxis_avoid.env.SixAxisAvoidGoalEnv.compute_reward>` (every env shares the model)."""
+        return self._goal_rewards(achieved_goal, desired_goal, info)

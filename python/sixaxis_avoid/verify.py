@@ -8,6 +8,8 @@ runs, and ``mj_geomDistance`` measures every arm capsule against every obstacle 
 reports per move the smallest capsule-box distance (mm, negative when they overlap), the
 same for the arm's centre line (capsule distance + radius), eq. 11's smallest distance from
 the polyline to an obstacle centre (cells), and the steps at which MuJoCo found a contact.
+The interpolation and eq. 11 are the core's (``_core.interpolate``,
+``_core.centres_clearance_cells``): the code the planner checks motions with.
 
 Command line (needs the ``mujoco`` extra)::
 
@@ -89,31 +91,11 @@ class VerifyReport:
         return d
 
 
-def _wrap(a: np.ndarray) -> np.ndarray:
-    """Angles wrapped to (-pi, pi]."""
-    w = np.mod(a, 2 * np.pi)
-    return np.where(w > np.pi, w - 2 * np.pi, w)
-
-
 def interpolate(q0: np.ndarray, q1: np.ndarray, steps: int) -> np.ndarray:
     """``steps + 1`` poses from ``q0`` to ``q1`` (radians), each joint along its shortest
-    angular difference, as the core's planner interpolates; shape ``(steps + 1, 6)``."""
-    f = np.linspace(0.0, 1.0, steps + 1)[:, None]
-    return _wrap(q0 + f * _wrap(q1 - q0))
-
-
-def _eq11_cells(points_mm: np.ndarray, centres_mm: np.ndarray, cell_mm: float) -> float:
-    """Eq. 11: smallest distance from the polyline (k, 3) to any centre (m, 3), in cells."""
-    if len(centres_mm) == 0:
-        return float("inf")
-    a, b = points_mm[:-1], points_mm[1:]
-    ab = b - a
-    ll = np.einsum("ij,ij->i", ab, ab)
-    ap = centres_mm[None, :, :] - a[:, None, :]
-    w = np.einsum("ijk,ik->ij", ap, ab) / np.where(ll > 0, ll, 1.0)[:, None]
-    w = np.clip(np.where(ll[:, None] > 0, w, 0.0), 0.0, 1.0)
-    foot = a[:, None, :] + w[..., None] * ab[:, None, :]
-    return float(np.min(np.linalg.norm(centres_mm[None] - foot, axis=-1)) / cell_mm)
+    angular difference: the poses at which the core's planner checks the move
+    (``_core.interpolate``); shape ``(steps + 1, 6)``."""
+    return _core.interpolate(q0, q1, int(steps))
 
 
 def _plan_dict(plan: Any) -> dict[str, Any]:
@@ -162,22 +144,13 @@ def verify_plan(
     arm = [g for g, n in enumerate(geom_names) if n and n.startswith("seg")]
     obst = [g for g, n in enumerate(geom_names) if n and n.startswith("obstacle")]
     radius_mm = float(model.geom_size[arm[0], 0]) * 1000.0
-    arm_kin = _core.Arm.from_scenario(s)
-    centres = np.asarray(obstacles, dtype=np.float64).reshape(-1, 3) * cell_mm
-    boxes = json.loads(s.to_json()).get("obstacle_boxes_mm", [])
-    box_centres = [
-        (np.asarray(b["min_mm"], dtype=np.float64) + np.asarray(b["max_mm"], dtype=np.float64)) / 2
-        for b in boxes
-        if b.get("distance_to") == "centre"
-    ]
-    if box_centres:
-        centres = np.vstack([centres, np.asarray(box_centres)])
     path = [tuple(int(v) for v in c) for c in p["path"]]
     fromto = np.zeros(6)
     moves = []
     for k in range(len(poses) - 1):
-        best, closest, eq11, contact_steps = np.inf, ("", ""), np.inf, []
-        for i, q in enumerate(interpolate(poses[k], poses[k + 1], steps)):
+        best, closest, contact_steps = np.inf, ("", ""), []
+        qs = interpolate(poses[k], poses[k + 1], steps)
+        for i, q in enumerate(qs):
             data.qpos[:] = q
             mujoco.mj_forward(model, data)
             if data.ncon > 0:
@@ -187,7 +160,8 @@ def verify_plan(
                     dist = mujoco.mj_geomDistance(model, data, a, o, 10.0, fromto)
                     if dist < best:
                         best, closest = dist, (geom_names[a], geom_names[o])
-            eq11 = min(eq11, _eq11_cells(arm_kin.points_mm(q), centres, cell_mm))
+        # Eq. 11 to the obstacle cells' and the centre boxes' centres, by the core.
+        eq11 = float(np.min(_core.centres_clearance_cells(s, qs, cell_mm)))
         moves.append(
             MoveCheck(
                 index=k,

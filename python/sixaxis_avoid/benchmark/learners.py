@@ -102,13 +102,15 @@ class RunContext:
     def make_env(self, **kwargs: Any) -> gym.Env:
         """The task's training env (``sixaxis_avoid.make``), counting steps, episodes and
         the first success, and scoring the greedy path when a checkpoint is passed. Goal tasks
-        get ``obs_type="goal"`` and ``random_target=True`` unless given."""
+        get the goal-conditioned id ``SixAxisAvoidGoal-v0`` and ``random_target=True`` unless
+        given."""
         import sixaxis_avoid as sa
 
+        env_id = sa.ENV_ID
         if self.task.is_goal:
-            kwargs.setdefault("obs_type", "goal")
+            env_id = sa.GOAL_ENV_ID
             kwargs.setdefault("random_target", True)
-        return CountingEnv(sa.make(scenario=self.world, **kwargs), self)
+        return CountingEnv(sa.make(env_id, scenario=self.world, **kwargs), self)
 
     def on_step(self, reached: bool, done: bool) -> None:
         self.env_steps += 1
@@ -528,8 +530,8 @@ class SB3Learner(Learner):
         key = (tuple(world.target), len(world.obstacles))
         env = self._eval_envs.get(key)
         if env is None:
-            obs_type = "goal" if self._goal else "vector"
-            env = sa.make(scenario=world, obs_type=obs_type, **self._env_kw).unwrapped
+            env_id = sa.GOAL_ENV_ID if self._goal else sa.ENV_ID
+            env = sa.make(env_id, scenario=world, **self._env_kw).unwrapped
             self._eval_envs[key] = env
         return greedy_rollout(self.model, env, world.max_steps_per_episode)
 

@@ -11,6 +11,8 @@
 //! - [`Episode`] — one env's running episode: [`Episode::reset`], [`Episode::step`].
 //! - [`BatchEnv`] — N episodes with next-step autoreset and a step cap, stepped together
 //!   into caller-provided buffers ([`BatchEnv::step`]).
+//! - [`EnvModel::goal_rewards`] — the rewards of (achieved, desired) goal pairs, for
+//!   hindsight relabelling (`SixAxisAvoidGoal-v0`'s `compute_reward`).
 //!
 //! # Semantics
 //!
@@ -23,7 +25,8 @@
 //! - **Vector observation** ([`VECTOR_OBS_DIM`] = 13 `f32`): the terminal's cell normalised
 //!   to the bounds (`2 (c - min) / max(max - min, 1) - 1`, in [-1, 1]), the target's cell
 //!   normalised the same way, six flags (1 if the move of that action collides), and 1 if
-//!   the last step collided. **Index observation**: the state number of the terminal's cell
+//!   the last step collided ([`OBS_TERMINAL`], [`OBS_TARGET`], [`OBS_FLAGS`],
+//!   [`OBS_COLLIDED`]). **Index observation**: the state number of the terminal's cell
 //!   ([`GridWorld::state_of`]).
 //! - **Random targets** (`random_target`): each reset draws the target uniformly from the
 //!   free cells other than the start, with the episode's own `ChaCha8Rng` (seeded by
@@ -35,6 +38,13 @@
 //!   excluded) at which no pose of the whole arm is clear ([`PosePlanner::cell_reachable`]);
 //!   passed as extra obstacles, a move into one counts as a collision.
 //!   [`first_clear_pose`] gives a pose to draw at a cell.
+//! - **Goals** (goal-conditioned learning): the achieved goal is the terminal's normalised
+//!   cell, the desired goal the target's ([`OBS_TERMINAL`], [`OBS_TARGET`] of the vector
+//!   observation). [`EnvModel::goal_cell`] inverts the normalisation;
+//!   [`EnvModel::goal_rewards`] gives the reward a step that ended at the achieved cell would
+//!   have earned with the desired cell as target, from the same eqs. 5 and 10 as the step
+//!   ([`base_reward_of`]) plus the step's own eq. 9 term, times `reward_scale`: for the
+//!   step's own goals it equals the step's reward to the bit.
 //! - **Next-step autoreset** ([`BatchEnv`]): the step after an episode ends resets that env
 //!   instead of moving it; that step's action is ignored, its reward is 0 and it neither
 //!   terminates nor truncates.
@@ -45,13 +55,22 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::error::{Error, Result};
-use crate::grid::{Assist, GridWorld, NUM_ACTIONS};
+use crate::grid::{base_reward_of, cell_distance, Assist, GridWorld, NUM_ACTIONS};
 use crate::kinematics::{Joints, TerminalPose};
 use crate::planner::PosePlanner;
 use crate::scenario::{Cell, Scenario};
 
 /// Length of the vector observation.
 pub const VECTOR_OBS_DIM: usize = 13;
+
+/// The terminal's normalised cell in the vector observation (the achieved goal).
+pub const OBS_TERMINAL: std::ops::Range<usize> = 0..3;
+/// The target's normalised cell in the vector observation (the desired goal).
+pub const OBS_TARGET: std::ops::Range<usize> = 3..6;
+/// The six collision flags (one per action) in the vector observation.
+pub const OBS_FLAGS: std::ops::Range<usize> = 6..12;
+/// The flag "the last step collided" in the vector observation.
+pub const OBS_COLLIDED: usize = 12;
 
 /// Per-state part of the vector observation: normalised cell (3) and neighbour flags (6).
 const STATE_ROW: usize = 9;
@@ -162,8 +181,9 @@ impl EnvModel {
         self.world.num_states()
     }
 
-    /// The cells random targets are drawn from.
-    pub fn target_cells(&self) -> Vec<Cell> {
+    /// The candidate targets: the cells random targets are drawn from (free, not the
+    /// start), in state order.
+    pub fn target_candidates(&self) -> Vec<Cell> {
         self.target_states
             .iter()
             .map(|&s| self.world.cell_of(s as usize))
@@ -174,6 +194,93 @@ impl EnvModel {
     pub fn normalised(&self, state: usize) -> [f32; 3] {
         let r = &self.rows[state];
         [r[0], r[1], r[2]]
+    }
+
+    /// The cell of a normalised position (a goal): the inverse of the vector observation's
+    /// `2 (c - min) / max(max - min, 1) - 1`, rounded to the nearest cell. Positions outside
+    /// [-1, 1] give cells outside the bounds.
+    pub fn goal_cell(&self, goal: [f64; 3]) -> Cell {
+        let b = self.world.bounds();
+        std::array::from_fn(|i| {
+            let half = ((b.max[i] - b.min[i]).max(1)) as f64 / 2.0;
+            b.min[i] + ((goal[i] + 1.0) * half).round() as i32
+        })
+    }
+
+    /// The rewards of `n` (achieved, desired) goal pairs (`achieved`, `desired`: `3 n`
+    /// normalised coordinates, row-major, each finite and in [-1, 1]), given each step's
+    /// `collided` flag and eq. 9 term (`detour_penalty`, as [`StepOutcome::detour_penalty`];
+    /// used only with detour assist). Pair `i` gets eq. 5 + eq. 10 ([`base_reward_of`]) for a
+    /// move that ended at the achieved cell with the desired cell as target (`d_o` from the
+    /// start to the desired cell), plus `detour_penalty[i]`, times `reward_scale`: the same
+    /// arithmetic as [`Episode::step`], so a step's own goals give its reward to the bit.
+    pub fn goal_rewards(
+        &self,
+        achieved: &[f64],
+        desired: &[f64],
+        collided: &[bool],
+        detour_penalty: &[f64],
+    ) -> Result<Vec<f64>> {
+        let n = collided.len();
+        let lengths = [
+            ("achieved_goal", achieved.len(), 3 * n),
+            ("desired_goal", desired.len(), 3 * n),
+            ("detour_penalty", detour_penalty.len(), n),
+        ];
+        for (name, len, want) in lengths {
+            if len != want {
+                return Err(Error::argument(
+                    name,
+                    format!("{len} values"),
+                    format!("expected {want} (one per goal pair, {n} pairs)"),
+                ));
+            }
+        }
+        for (name, goals) in [("achieved_goal", achieved), ("desired_goal", desired)] {
+            if let Some((i, g)) = goals
+                .iter()
+                .enumerate()
+                .find(|(_, g)| !(-1.0..=1.0).contains(*g))
+            {
+                return Err(Error::argument(
+                    name,
+                    format!("{g} at pair {}", i / 3),
+                    "goals are normalised cells: each coordinate must be a number in [-1, 1]",
+                ));
+            }
+        }
+        if let Some((i, d)) = detour_penalty
+            .iter()
+            .enumerate()
+            .find(|(_, d)| !d.is_finite())
+        {
+            return Err(Error::argument(
+                "detour_penalty",
+                format!("{d} at pair {i}"),
+                "must be a finite number (eq. 9's part of the step's reward)",
+            ));
+        }
+        let w = &self.world;
+        let start = w.cell_of(w.start());
+        let (assist, scale) = (self.opts.assist, self.opts.reward_scale);
+        let cell = |g: &[f64], i: usize| self.goal_cell([g[3 * i], g[3 * i + 1], g[3 * i + 2]]);
+        Ok((0..n)
+            .map(|i| {
+                let (a, d) = (cell(achieved, i), cell(desired, i));
+                let mut reward = base_reward_of(
+                    w.rewards(),
+                    collided[i],
+                    a == d,
+                    cell_distance(start, d),
+                    cell_distance(a, d),
+                    assist,
+                );
+                if assist.detour {
+                    reward += detour_penalty[i];
+                }
+                reward * scale
+            })
+            .collect())
     }
 }
 
@@ -352,10 +459,10 @@ impl Episode {
     pub fn write_vector_obs(&self, model: &EnvModel, out: &mut [f32]) {
         let row = &model.rows[self.state as usize];
         let trow = &model.rows[self.target as usize];
-        out[0..3].copy_from_slice(&row[..3]);
-        out[3..6].copy_from_slice(&trow[..3]);
-        out[6..12].copy_from_slice(&row[3..9]);
-        out[12] = if self.collided { 1.0 } else { 0.0 };
+        out[OBS_TERMINAL].copy_from_slice(&row[..3]);
+        out[OBS_TARGET].copy_from_slice(&trow[..3]);
+        out[OBS_FLAGS].copy_from_slice(&row[3..9]);
+        out[OBS_COLLIDED] = if self.collided { 1.0 } else { 0.0 };
     }
 }
 
@@ -632,6 +739,79 @@ mod tests {
         }
         assert!(last.unwrap().reached);
         assert_eq!(ep.distance_to_target(&m), 0.0);
+    }
+
+    #[test]
+    fn goal_rewards_equal_step_rewards_to_the_bit() {
+        for (random_target, assist, scale) in [
+            (true, Assist::on(), 1.0),
+            (true, Assist::off(), 1e-4),
+            (false, Assist::on(), 0.3),
+        ] {
+            let s = Scenario::builtin("paper_simple").unwrap();
+            let m = EnvModel::new(
+                &s,
+                EnvOptions {
+                    random_target,
+                    assist,
+                    reward_scale: scale,
+                    ..EnvOptions::default()
+                },
+            )
+            .unwrap();
+            let mut ep = Episode::new(&m);
+            ep.seed(7);
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let (mut ach, mut des, mut col, mut det, mut want) =
+                (vec![], vec![], vec![], vec![], vec![]);
+            let mut collisions = 0;
+            for _ in 0..20 {
+                ep.reset(&m);
+                for _ in 0..30 {
+                    let out = ep.step(&m, rng.random_range(0..NUM_ACTIONS));
+                    let mut obs = [0f32; VECTOR_OBS_DIM];
+                    ep.write_vector_obs(&m, &mut obs);
+                    ach.extend(obs[OBS_TERMINAL].iter().map(|&v| v as f64));
+                    des.extend(obs[OBS_TARGET].iter().map(|&v| v as f64));
+                    col.push(out.collided);
+                    det.push(out.detour_penalty);
+                    want.push(out.reward);
+                    collisions += out.collided as usize;
+                    if out.reached {
+                        break;
+                    }
+                }
+            }
+            assert!(collisions > 0);
+            let got = m.goal_rewards(&ach, &des, &col, &det).unwrap();
+            assert_eq!(
+                got.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                want.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
+
+    #[test]
+    fn goal_rewards_relabel_and_check_their_inputs() {
+        let m = model(false);
+        let w = m.world();
+        let t = m.normalised(w.target()).map(f64::from);
+        let r = m.goal_rewards(&t, &t, &[false], &[0.0]).unwrap();
+        // Reaching the desired cell: +r plus eq. 10's r_e * d_o (d_t = 0).
+        assert_eq!(r[0], 20000.0 + 40.0 * w.start_distance_cells());
+        let c = m.goal_rewards(&t, &t, &[true], &[0.0]).unwrap();
+        assert_eq!(c[0], -8000.0 + 40.0 * w.start_distance_cells());
+        let err = m.goal_rewards(&t, &t[..2], &[false], &[0.0]).unwrap_err();
+        assert!(err.to_string().contains("desired_goal"), "{err}");
+        let err = m
+            .goal_rewards(&[2.0, 0.0, 0.0], &t, &[false], &[0.0])
+            .unwrap_err();
+        assert!(err.to_string().contains("achieved_goal"), "{err}");
+        let err = m.goal_rewards(&t, &t, &[false], &[f64::NAN]).unwrap_err();
+        assert!(err.to_string().contains("detour_penalty"), "{err}");
+        for s in 0..w.num_states() {
+            assert_eq!(m.goal_cell(m.normalised(s).map(f64::from)), w.cell_of(s));
+        }
     }
 
     #[test]

@@ -121,7 +121,8 @@ fn fmt_cell(c: Cell) -> String {
     format!("[{}, {}, {}]", c[0], c[1], c[2])
 }
 
-fn cell_distance(a: Cell, b: Cell) -> f64 {
+/// Euclidean distance between two cells, in cells (`d_o` and `d_t` of eq. 10).
+pub fn cell_distance(a: Cell, b: Cell) -> f64 {
     let d2: i64 = (0..3)
         .map(|i| {
             let d = (a[i] - b[i]) as i64;
@@ -129,6 +130,35 @@ fn cell_distance(a: Cell, b: Cell) -> f64 {
         })
         .sum();
     (d2 as f64).sqrt()
+}
+
+/// Eq. 5 plus (if `assist.distance`) eq. 10, without eq. 9: `-collision_penalty` if the move
+/// `collided`, else `+target_reward` if it reached the target (`at_target`: the new cell is
+/// the target), else `-step_penalty`; then `+distance_reward * (d_o - d_t)` (cells).
+///
+/// The one place these equations are written: [`GridWorld::step`] and the relabelled rewards
+/// of goal-conditioned learning ([`EnvModel::goal_rewards`](crate::env::EnvModel::goal_rewards))
+/// both call it.
+#[inline]
+pub fn base_reward_of(
+    r: &Rewards,
+    collided: bool,
+    at_target: bool,
+    d_o: f64,
+    d_t: f64,
+    assist: Assist,
+) -> f64 {
+    let mut reward = if collided {
+        -r.collision_penalty
+    } else if at_target {
+        r.target_reward
+    } else {
+        -r.step_penalty
+    };
+    if assist.distance {
+        reward += r.distance_reward * (d_o - d_t);
+    }
+    reward
 }
 
 impl GridWorld {
@@ -447,18 +477,14 @@ impl GridWorld {
     pub fn base_reward(&self, state: usize, action: usize, assist: Assist) -> f64 {
         let next = self.topo.next[state][action] as usize;
         let collided = next == state;
-        let r = &self.rewards;
-        let mut reward = if collided {
-            -r.collision_penalty
-        } else if next == self.target {
-            r.target_reward
-        } else {
-            -r.step_penalty
-        };
-        if assist.distance {
-            reward += r.distance_reward * (self.d_o - self.dist[next]);
-        }
-        reward
+        base_reward_of(
+            &self.rewards,
+            collided,
+            next == self.target,
+            self.d_o,
+            self.dist[next],
+            assist,
+        )
     }
 
     /// Eq. 9's extra term (<= 0): given the action of the previous step if it collided.

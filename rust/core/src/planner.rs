@@ -105,6 +105,16 @@ impl PosePlan {
     }
 }
 
+/// The `steps + 1` poses of the joint-space move from `from` to `to` (radians) at which the
+/// planner checks a motion: `interpolate(from, to, k / steps)` for `k = 0..=steps` (each
+/// joint along its shortest angular difference, [`interpolate`]). `steps = 0` counts as 1.
+pub fn motion_steps(from: &Joints, to: &Joints, steps: u32) -> Vec<Joints> {
+    let n = steps.max(1);
+    (0..=n)
+        .map(|k| interpolate(from, to, k as f64 / n as f64))
+        .collect()
+}
+
 /// How close a planned motion comes to the obstacles, over every interpolation step
 /// (`k = 0..=t` of every move, so every pose included), measured two ways.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -447,9 +457,7 @@ impl PosePlanner {
         let first = poses.first()?;
         let mut steps = vec![*first];
         for w in poses.windows(2) {
-            steps.extend(
-                (1..=self.steps).map(|k| interpolate(&w[0], &w[1], k as f64 / self.steps as f64)),
-            );
+            steps.extend_from_slice(&motion_steps(&w[0], &w[1], self.steps)[1..]);
         }
         let mut m = MotionClearance {
             min_centre_clearance_cells: f64::INFINITY,

@@ -192,18 +192,35 @@ pub fn check_path(world: &GridWorld, path: &[Cell]) -> Result<()> {
             _ => {}
         }
         if i > 0 {
-            let p = path[i - 1];
-            let d: i32 = (0..3).map(|k| (c[k] - p[k]).abs()).sum();
-            if d != 1 {
-                return bad(format!(
-                    "step {i} from {} to {} is not a move to one of the six neighbouring cells",
-                    fmt_cell(p),
-                    fmt_cell(c)
-                ));
-            }
+            check_move(path, i)?;
         }
     }
     Ok(())
+}
+
+/// Check that every step of `path` moves to one of the six neighbouring cells (the rule of
+/// [`check_path`] that needs no world; Algorithm 1's `plan_poses` input is checked with it).
+/// The error ([`Error::InvalidArgument`] named `path`) says which step breaks it.
+pub fn check_moves(path: &[Cell]) -> Result<()> {
+    (1..path.len()).try_for_each(|i| check_move(path, i))
+}
+
+/// Step `i` of `path` (from point `i - 1` to point `i`) is a move to a neighbouring cell.
+fn check_move(path: &[Cell], i: usize) -> Result<()> {
+    let (p, c) = (path[i - 1], path[i]);
+    let d: i32 = (0..3).map(|k| (c[k] - p[k]).abs()).sum();
+    if d == 1 {
+        return Ok(());
+    }
+    Err(Error::argument(
+        "path",
+        fmt_path(path),
+        format!(
+            "step {i} from {} to {} is not a move to one of the six neighbouring cells",
+            fmt_cell(p),
+            fmt_cell(c)
+        ),
+    ))
 }
 
 /// Learning figures of one round of Algorithm 2.
@@ -443,5 +460,20 @@ pub fn plan(
                 result.replans = round;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn check_moves_names_the_first_jump() {
+        assert!(check_moves(&[]).is_ok());
+        assert!(check_moves(&[[0, 0, 0], [0, 0, 1], [0, -1, 1]]).is_ok());
+        let err = check_moves(&[[0, 0, 0], [0, 0, 1], [1, 1, 1]]).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("path") && msg.contains("step 2"), "{msg}");
+        assert!(check_moves(&[[0, 0, 0], [0, 0, 0]]).is_err()); // staying is no move
     }
 }

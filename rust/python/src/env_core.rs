@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -65,6 +67,116 @@ fn build_model(
     };
     let model = run_attached(py, || EnvModel::new(&s, opts))?;
     Ok((s, Arc::new(model)))
+}
+
+/// A float64 array of shape ``(n, 3)`` (goals), flattened row-major, and its `n`.
+fn goals_arg(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<f64>, usize)> {
+    let bad = || {
+        invalid_argument(
+            py,
+            name,
+            repr(obj),
+            "must be a float64 array of shape (n, 3) (normalised cells, one row per goal)",
+        )
+    };
+    let arr: PyReadonlyArray2<'_, f64> = obj.extract().map_err(|_| bad())?;
+    if arr.shape()[1] != 3 {
+        return Err(bad());
+    }
+    Ok((arr.as_array().iter().copied().collect(), arr.shape()[0]))
+}
+
+/// A one-dimensional array of `n` values (`what` names the dtype).
+fn column_arg<'py, T>(
+    py: Python<'_>,
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    what: &str,
+    n: usize,
+) -> PyResult<Vec<T>>
+where
+    T: numpy::Element + Copy,
+{
+    let bad = || {
+        invalid_argument(
+            py,
+            name,
+            repr(obj),
+            format!("must be a {what} array of shape ({n},), one per goal pair"),
+        )
+    };
+    let arr: PyReadonlyArray1<'py, T> = obj.extract().map_err(|_| bad())?;
+    if arr.len() != n {
+        return Err(bad());
+    }
+    Ok(arr.as_array().to_vec())
+}
+
+/// ``EnvModel::goal_rewards`` over NumPy arrays (the ``compute_reward`` of both engines).
+fn goal_rewards<'py>(
+    py: Python<'py>,
+    model: &EnvModel,
+    achieved_goal: &Bound<'py, PyAny>,
+    desired_goal: &Bound<'py, PyAny>,
+    collided: &Bound<'py, PyAny>,
+    detour_penalty: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (a, n) = goals_arg(py, achieved_goal, "achieved_goal")?;
+    let (d, m) = goals_arg(py, desired_goal, "desired_goal")?;
+    if m != n {
+        return Err(invalid_argument(
+            py,
+            "desired_goal",
+            format!("array of shape ({m}, 3)"),
+            format!("must have the shape of achieved_goal ({n}, 3)"),
+        ));
+    }
+    let c: Vec<bool> = column_arg(py, collided, "collided", "bool", n)?;
+    let p: Vec<f64> = column_arg(py, detour_penalty, "detour_penalty", "float64", n)?;
+    let r = run_attached(py, || model.goal_rewards(&a, &d, &c, &p))?;
+    Ok(PyArray1::from_vec(py, r))
+}
+
+/// ``EnvModel::goal_cell`` over a ``(n, 3)`` float64 array: ``(n, 3)`` int64 cells.
+fn goal_cells<'py>(
+    py: Python<'py>,
+    model: &EnvModel,
+    goal: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<i64>>> {
+    let (g, n) = goals_arg(py, goal, "goal")?;
+    if let Some(v) = g.iter().find(|v| !v.is_finite()) {
+        return Err(invalid_argument(py, "goal", v, "must be finite numbers"));
+    }
+    let rows: Vec<Vec<i64>> = (0..n)
+        .map(|i| {
+            let c = model.goal_cell([g[3 * i], g[3 * i + 1], g[3 * i + 2]]);
+            c.iter().map(|&v| v as i64).collect()
+        })
+        .collect();
+    if n == 0 {
+        return Ok(PyArray2::zeros(py, [0, 3], false));
+    }
+    Ok(PyArray2::from_vec2(py, &rows)?)
+}
+
+fn cell_of_state<'py>(
+    py: Python<'py>,
+    model: &EnvModel,
+    state: usize,
+) -> PyResult<Bound<'py, PyTuple>> {
+    if state >= model.num_states() {
+        return Err(invalid_argument(
+            py,
+            "state",
+            state,
+            format!("must be < num_states = {}", model.num_states()),
+        ));
+    }
+    cell_tuple(py, model.world().cell_of(state))
+}
+
+fn cell_tuples<'py>(py: Python<'py>, cells: &[Cell]) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+    cells.iter().map(|c| cell_tuple(py, *c)).collect()
 }
 
 fn cell_tuple<'py>(py: Python<'py>, c: Cell) -> PyResult<Bound<'py, PyTuple>> {
@@ -248,15 +360,7 @@ impl PyEnvCore {
     }
     /// The cell of a state.
     fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
-        if state >= self.model.num_states() {
-            return Err(invalid_argument(
-                py,
-                "state",
-                state,
-                format!("must be < num_states = {}", self.model.num_states()),
-            ));
-        }
-        cell_tuple(py, self.model.world().cell_of(state))
+        cell_of_state(py, &self.model, state)
     }
     /// The state of a cell, or None outside bounds.
     fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
@@ -265,31 +369,45 @@ impl PyEnvCore {
     /// All obstacle centres: the scenario's, then the extra ones.
     #[getter]
     fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        self.model
-            .world()
-            .obstacles()
-            .iter()
-            .map(|c| cell_tuple(py, *c))
-            .collect()
+        cell_tuples(py, self.model.world().obstacles())
     }
     /// The extra obstacles given at construction.
     #[getter]
     fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        self.model
-            .options()
-            .extra_obstacles
-            .iter()
-            .map(|c| cell_tuple(py, *c))
-            .collect()
+        cell_tuples(py, &self.model.options().extra_obstacles)
     }
-    /// The cells random targets are drawn from.
+    /// The candidate targets: the cells random targets are drawn from (free, not the start).
     #[getter]
-    fn target_cells<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        self.model
-            .target_cells()
-            .into_iter()
-            .map(|c| cell_tuple(py, c))
-            .collect()
+    fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        cell_tuples(py, &self.model.target_candidates())
+    }
+    /// Rewards of ``n`` (achieved, desired) goal pairs (float64 ``(n, 3)`` each) given each
+    /// step's ``collided`` (bool ``(n,)``) and ``detour_penalty`` (float64 ``(n,)``): the
+    /// core's ``EnvModel::goal_rewards``, the step's own eqs. 5, 9, 10. ``(n,)`` float64.
+    fn compute_reward<'py>(
+        &self,
+        py: Python<'py>,
+        achieved_goal: &Bound<'py, PyAny>,
+        desired_goal: &Bound<'py, PyAny>,
+        collided: &Bound<'py, PyAny>,
+        detour_penalty: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        goal_rewards(
+            py,
+            &self.model,
+            achieved_goal,
+            desired_goal,
+            collided,
+            detour_penalty,
+        )
+    }
+    /// The cells (int64 ``(n, 3)``) of normalised goals (float64 ``(n, 3)``).
+    fn goal_to_cell<'py>(
+        &self,
+        py: Python<'py>,
+        goal: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        goal_cells(py, &self.model, goal)
     }
     /// Blocked flag per state (the terminal collides there), as a bool array.
     #[getter]
@@ -533,9 +651,74 @@ impl PyVecEnvCore {
     fn steps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
         PyArray1::from_iter(py, self.batch.episodes().iter().map(|e| e.steps()))
     }
-    /// Target cell per env, ``(n, 3)``.
+    /// The candidate targets: the cells random targets are drawn from (free, not the start).
     #[getter]
-    fn target_cells<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i32>>> {
+    fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        cell_tuples(py, &self.batch.model().target_candidates())
+    }
+    /// All obstacle centres: the scenario's, then the extra ones.
+    #[getter]
+    fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        cell_tuples(py, self.batch.model().world().obstacles())
+    }
+    /// The extra obstacles given at construction.
+    #[getter]
+    fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+        cell_tuples(py, &self.batch.model().options().extra_obstacles)
+    }
+    /// The reward scale.
+    #[getter]
+    fn reward_scale(&self) -> f64 {
+        self.batch.model().options().reward_scale
+    }
+    /// Whether each reset draws a random target.
+    #[getter]
+    fn random_target(&self) -> bool {
+        self.batch.model().options().random_target
+    }
+    /// ``(detour, distance)``: which assisted-learning terms shape the reward.
+    #[getter]
+    fn assist(&self) -> (bool, bool) {
+        let a = self.batch.model().options().assist;
+        (a.detour, a.distance)
+    }
+    /// The cell of a state.
+    fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
+        cell_of_state(py, self.batch.model(), state)
+    }
+    /// The state of a cell, or None outside bounds.
+    fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+        Ok(self.batch.model().world().state_of(cell(c, "cell")?))
+    }
+    /// As ``EnvCore.compute_reward`` (the envs share one model).
+    fn compute_reward<'py>(
+        &self,
+        py: Python<'py>,
+        achieved_goal: &Bound<'py, PyAny>,
+        desired_goal: &Bound<'py, PyAny>,
+        collided: &Bound<'py, PyAny>,
+        detour_penalty: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        goal_rewards(
+            py,
+            self.batch.model(),
+            achieved_goal,
+            desired_goal,
+            collided,
+            detour_penalty,
+        )
+    }
+    /// As ``EnvCore.goal_to_cell``.
+    fn goal_to_cell<'py>(
+        &self,
+        py: Python<'py>,
+        goal: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        goal_cells(py, self.batch.model(), goal)
+    }
+    /// Each env's current target cell, ``(n, 3)``.
+    #[getter]
+    fn current_targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i32>>> {
         let w = self.batch.model().world();
         let v: Vec<Vec<i32>> = self
             .batch

@@ -64,6 +64,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(planner::unreachable_cells, m)?)?;
     m.add_function(wrap_pyfunction!(planner::clear_pose_at, m)?)?;
     m.add_function(wrap_pyfunction!(planner::cells_reachable, m)?)?;
+    m.add_function(wrap_pyfunction!(planner::interpolate, m)?)?;
+    m.add_function(wrap_pyfunction!(planner::centres_clearance_cells, m)?)?;
     m.add_class::<plan::PyPlanResult>()?;
     m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
     m.add_function(wrap_pyfunction!(plan::generate_scenario, m)?)?;
@@ -72,6 +74,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(util::expand_names, m)?)?;
     m.add_function(wrap_pyfunction!(export::export_scenario, m)?)?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
+    let (t, g) = (
+        sixaxis_core::env::OBS_TERMINAL,
+        sixaxis_core::env::OBS_TARGET,
+    );
+    m.add("VECTOR_OBS_TERMINAL", (t.start, t.end))?;
+    m.add("VECTOR_OBS_TARGET", (g.start, g.end))?;
     m.add("DEFAULT_SCENARIO", scenario::DEFAULT_SCENARIO)?;
     m.add_function(wrap_pyfunction!(_raise_core_error, m)?)?;
     Ok(())

@@ -3,15 +3,18 @@
 use std::sync::Arc;
 
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
+use sixaxis_core::clearance::Clearance;
 use sixaxis_core::env::{first_clear_pose, unreachable_cells as core_unreachable};
-use sixaxis_core::planner::{PosePlan, PosePoint};
+use sixaxis_core::planner::{motion_steps, PosePlan, PosePoint};
+use sixaxis_core::replanning::check_moves;
+use sixaxis_core::scenario::DistanceTo;
 use sixaxis_core::{PosePlanner, Scenario};
 
 use crate::convert::{cell, joints6};
-use crate::errors::{invalid_argument, run};
+use crate::errors::{invalid_argument, run, run_attached};
 use crate::scenario::{scenario_from_any, PyScenario};
 
 /// Free cells (start and target excluded) at which no clear pose of the whole arm exists
@@ -132,17 +135,7 @@ impl PyPosePlanner {
         beta0_rad: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let cells = crate::convert::cells(Some(path), "path")?;
-        for (i, w) in cells.windows(2).enumerate() {
-            let steps: i32 = (0..3).map(|k| (w[1][k] - w[0][k]).abs()).sum();
-            if steps != 1 {
-                return Err(invalid_argument(
-                    py,
-                    "path",
-                    format!("{:?} -> {:?} at index {}", w[0], w[1], i + 1),
-                    "consecutive cells must be grid neighbours",
-                ));
-            }
-        }
+        run_attached(py, || check_moves(&cells))?;
         let beta0 = match beta0_rad.filter(|b| !b.is_none()) {
             Some(b) => joints6(b, "beta0_rad")?,
             None => self.scenario.arm.beta0_rad(),
@@ -188,4 +181,92 @@ pub fn cells_reachable<'py>(
             .collect::<Vec<_>>())
     })?;
     Ok(PyArray1::from_vec(py, mask))
+}
+
+/// The ``steps + 1`` poses (radians, ``(steps + 1, 6)``) of the joint-space move from ``q0``
+/// to ``q1`` at which the planner checks a motion (the core's ``planner::motion_steps``:
+/// each joint along its shortest angular difference, wrapped to (-pi, pi]).
+#[pyfunction]
+pub fn interpolate<'py>(
+    py: Python<'py>,
+    q0: &Bound<'py, PyAny>,
+    q1: &Bound<'py, PyAny>,
+    steps: i64,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (a, b) = (joints6(q0, "q0")?, joints6(q1, "q1")?);
+    if !(1..=1_000_000).contains(&steps) {
+        return Err(invalid_argument(
+            py,
+            "steps",
+            steps,
+            "must be an integer in 1..=1000000",
+        ));
+    }
+    let poses = motion_steps(&a, &b, steps as u32);
+    let rows: Vec<Vec<f64>> = poses.iter().map(|q| q.to_vec()).collect();
+    Ok(PyArray2::from_vec2(py, &rows)?)
+}
+
+/// Eq. 11 for each pose of ``poses_rad`` (``(n, 6)``): the smallest distance (cells) from the
+/// scenario arm's polyline to an obstacle centre — the scenario's obstacle cells and the
+/// centres of its ``distance_to: "centre"`` boxes (``surface`` boxes are not centres and do
+/// not count) — with cells of ``cell_mm`` (default: the scenario's). ``(n,)`` float64,
+/// ``inf`` without centres. The core's ``Clearance::centres_clearance_cells``.
+#[pyfunction]
+#[pyo3(signature = (scenario, poses_rad, cell_mm=None))]
+pub fn centres_clearance_cells<'py>(
+    py: Python<'py>,
+    scenario: &Bound<'py, PyAny>,
+    poses_rad: &Bound<'py, PyAny>,
+    cell_mm: Option<f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let s = scenario_from_any(py, Some(scenario))?;
+    let cell_mm = cell_mm.unwrap_or(s.cell_mm);
+    if !(cell_mm.is_finite() && cell_mm > 0.0) {
+        return Err(invalid_argument(
+            py,
+            "cell_mm",
+            cell_mm,
+            "must be a finite number > 0",
+        ));
+    }
+    let bad = || {
+        invalid_argument(
+            py,
+            "poses_rad",
+            crate::convert::repr(poses_rad),
+            "must be a finite float64 array of shape (n, 6) (joint angles, radians)",
+        )
+    };
+    let arr: numpy::PyReadonlyArray2<'_, f64> = poses_rad.extract().map_err(|_| bad())?;
+    let view = arr.as_array();
+    if view.ncols() != 6 || view.iter().any(|v| !v.is_finite()) {
+        return Err(bad());
+    }
+    let poses: Vec<[f64; 6]> = view
+        .rows()
+        .into_iter()
+        .map(|r| std::array::from_fn(|j| r[j]))
+        .collect();
+    let out = run(py, || {
+        let centre_boxes: Vec<_> = s
+            .obstacle_boxes_mm
+            .iter()
+            .filter(|b| b.distance_to == DistanceTo::Centre)
+            .cloned()
+            .collect();
+        let clearance = Clearance::new(
+            &s.obstacles,
+            cell_mm,
+            s.planning.clearance_model,
+            s.arm_safe_distance,
+        )
+        .with_boxes(&centre_boxes);
+        let arm = s.arm();
+        Ok(poses
+            .iter()
+            .map(|q| clearance.centres_clearance_cells(&arm.points_mm(q)))
+            .collect::<Vec<f64>>())
+    })?;
+    Ok(PyArray1::from_vec(py, out))
 }
