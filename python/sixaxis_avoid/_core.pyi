@@ -443,6 +443,11 @@ def generate_scenario(
     *,
     bounds: tuple[_CellLike, _CellLike] | dict[str, _CellLike] | None = None,
     # options:generate_scenario >>>
+    density: float | None = None,
+    min_start_target_distance: float | None = None,
+    require_arm_reachable: bool | None = None,
+    max_attempts: int | None = None,
+    template: str | None = None,
     # <<< options:generate_scenario
 ) -> Scenario: ...
 def write_atomic(path: str | PathLike[str], data: bytes | str) -> None: ...

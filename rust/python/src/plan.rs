@@ -354,14 +354,6 @@ pub fn plan(
     Ok(PyPlanResult { inner: result? })
 }
 
-fn finite(py: Python<'_>, name: &str, v: f64) -> PyResult<f64> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(invalid_argument(py, name, v, "must be a finite number"))
-    }
-}
-
 fn bounds_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Bounds> {
     let bad = || {
         invalid_argument(

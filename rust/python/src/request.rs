@@ -191,22 +191,28 @@ pub fn options<'py>(
     function: &str,
     scenario: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let infos = match function {
-        "train" => train_options(),
-        "plan" => plan_options(),
+    let s: Scenario = crate::scenario::scenario_from_any(py, scenario)?
+        .as_ref()
+        .clone();
+    let (infos, defaults) = match function {
+        "train" => (train_options(), option_values(&s)),
+        "plan" => (plan_options(), option_values(&s)),
+        "generate_scenario" => (
+            generator_options(),
+            GENERATOR_OPTIONS
+                .iter()
+                .map(|o| (o.info.key, (o.get)(&GeneratorOptions::default())))
+                .collect(),
+        ),
         other => {
             return Err(invalid_argument(
                 py,
                 "function",
                 other,
-                "must be \"train\" or \"plan\"",
+                "must be \"train\", \"plan\" or \"generate_scenario\"",
             ))
         }
     };
-    let s: Scenario = crate::scenario::scenario_from_any(py, scenario)?
-        .as_ref()
-        .clone();
-    let defaults = sixaxis_core::request::option_values(&s);
     let out = PyList::empty(py);
     for i in infos {
         let d = PyDict::new(py);
