@@ -73,7 +73,7 @@ def test_scenario_field_sets_the_default(paper_simple):
     assert r.q.dtype == np.float32
     assert sa.train(sa.Scenario(d), seed=0, episodes=50, q_precision="f64").q.dtype == np.float64
     d["learning"]["q_precision"] = "half"
-    with pytest.raises(sa.ScenarioError, match=r"`learning.q_precision` = half: must be one of f64, f32"):
+    with pytest.raises(sa.ScenarioError, match=r"`learning.q_precision` = half: must be one of"):
         sa.Scenario(d)
 
 

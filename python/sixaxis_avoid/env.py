@@ -11,11 +11,6 @@ from gymnasium import spaces
 
 from sixaxis_avoid import _arm, _core
 from sixaxis_avoid._checks import (
-    OBS_TYPES,
-    check_bool,
-    check_choice,
-    check_nonneg_float,
-    check_optional_bool,
     invalid,
 )
 from sixaxis_avoid._deps import require
@@ -51,19 +46,23 @@ def check_obs_type(obs_type: Any, goal: bool) -> str:
     """``"vector"`` / ``"index"`` on the plain envs (``"goal"`` names the goal id), ``"goal"``
     on the goal envs."""
     if goal:
-        return check_choice("obs_type", obs_type, ("goal",))
+        if obs_type != "goal":
+            raise invalid("obs_type", obs_type, 'must be "goal" on the goal envs')
+        return obs_type
     refuse_goal_obs_type(obs_type)
-    return check_choice("obs_type", obs_type, tuple(t for t in OBS_TYPES if t != "goal"))
+    _core.check_options("env", obs_type=obs_type)
+    return obs_type
+
+
+def check_keywords(**keywords: Any) -> None:
+    """Check env keywords against the core's one table (ENV_OPTIONS, rust/core/src/env.rs):
+    a bad value raises InvalidArgumentError naming the keyword and the value."""
+    _core.check_options("env", **keywords)
 
 
 def check_render_size(render_size: Any) -> int:
-    if (
-        isinstance(render_size, bool)
-        or not isinstance(render_size, int)
-        or not 64 <= render_size <= 4096
-    ):
-        raise invalid("render_size", render_size, "must be an integer in 64..=4096")
-    return render_size
+    _core.check_options("env", render_size=render_size)
+    return int(render_size)
 
 
 def check_random_target(obs_type: str, random_target: bool) -> None:
@@ -167,7 +166,8 @@ class SixAxisAvoidEnv(gym.Env):
         "SixAxisAvoid-v0",
         scenario="paper_simple",  # built-in name, JSON path, dict, Scenario, or None
         obs_type="vector",  # "vector" | "index" (goals: the id "SixAxisAvoidGoal-v0")
-        assist=True,  # eqs. 9 and 10 on (False: eq. 5 alone; None: the scenario's flags)
+        assist=None,  # None: the scenario's learning.assist_* (both on in every built-in);
+        # True: eqs. 9 and 10 on; False: eq. 5 alone
         reward_scale=1.0,  # finite, >= 0
         random_target=False,  # draw the target per episode (needs "vector" or "goal")
         arm_aware=False,  # cells no clear arm pose reaches count as collisions
@@ -183,6 +183,8 @@ class SixAxisAvoidEnv(gym.Env):
 
     - v0: initial version. The goal-conditioned variant, once ``obs_type="goal"`` of this
       id, is ``SixAxisAvoidGoal-v0``; ``obs_type="goal"`` raises an error naming it.
+      ``assist`` defaults to ``None`` (the scenario's flags, as ``train`` and ``plan``); every
+      built-in scenario has both on, so the built-in worlds behave as before (``True``).
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 8}
@@ -193,7 +195,7 @@ class SixAxisAvoidEnv(gym.Env):
         self,
         scenario: Any = None,
         obs_type: str = "vector",
-        assist: bool | None = True,
+        assist: bool | None = None,
         reward_scale: float = 1.0,
         random_target: bool = False,
         arm_aware: bool = False,
@@ -202,13 +204,24 @@ class SixAxisAvoidEnv(gym.Env):
         render_size: int = 512,
     ):
         check_obs_type(obs_type, self._GOAL)
-        assist = check_optional_bool("assist", assist)
-        reward_scale = check_nonneg_float("reward_scale", reward_scale)
-        random_target = check_bool("random_target", random_target)
-        arm_aware = check_bool("arm_aware", arm_aware)
-        render_arm = check_bool("render_arm", render_arm)
-        check_choice("render_mode", render_mode, (None, *self.metadata["render_modes"]))
-        check_render_size(render_size)
+        # Every keyword against the core's one table (ENV_OPTIONS, rust/core/src/env.rs).
+        _core.check_options(
+            "env",
+            assist=assist,
+            reward_scale=reward_scale,
+            random_target=random_target,
+            arm_aware=arm_aware,
+            render_mode=render_mode,
+            render_arm=render_arm,
+            render_size=render_size,
+        )
+        reward_scale = float(reward_scale)
+        random_target, arm_aware, render_arm = (
+            bool(random_target),
+            bool(arm_aware),
+            bool(render_arm),
+        )
+        assist = None if assist is None else bool(assist)
         check_random_target(obs_type, random_target)
         if render_mode == "human":
             # Fail at construction, not at the first frame, if Matplotlib is missing.
@@ -390,7 +403,7 @@ class SixAxisAvoidGoalEnv(SixAxisAvoidEnv):
     def __init__(
         self,
         scenario: Any = None,
-        assist: bool | None = True,
+        assist: bool | None = None,
         reward_scale: float = 1.0,
         random_target: bool = False,
         arm_aware: bool = False,

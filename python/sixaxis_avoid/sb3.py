@@ -30,10 +30,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sixaxis_avoid._checks import check_bool, check_choice, invalid
+from sixaxis_avoid._checks import check_choice, invalid
 from sixaxis_avoid._deps import require
 from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
-from sixaxis_avoid.env import check_render_size
+from sixaxis_avoid.env import check_keywords, check_render_size
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
 _vec_env = require("stable_baselines3.common.vec_env", "sixaxis_avoid.sb3")
@@ -111,7 +111,9 @@ class SixAxisVecEnv(VecEnv):
     ):
         render_mode = env_kwargs.pop("render_mode", None)
         check_choice("render_mode", render_mode, (None, "rgb_array"))
-        self.render_arm = check_bool("render_arm", env_kwargs.pop("render_arm", False))
+        render_arm = env_kwargs.pop("render_arm", False)
+        check_keywords(render_arm=render_arm)
+        self.render_arm = bool(render_arm)
         render_size = env_kwargs.pop("render_size", 512)
         # Checked now, as the single env does, though only rendering uses it.
         self._render_size = check_render_size(render_size)

@@ -13,10 +13,6 @@ from gymnasium.vector.utils import batch_space
 
 from sixaxis_avoid import _arm, _core
 from sixaxis_avoid._checks import (
-    check_bool,
-    check_nonneg_float,
-    check_optional_bool,
-    check_positive_int,
     invalid,
 )
 from sixaxis_avoid._goal import GoalRewards, goal_dict, goal_to_cell
@@ -69,7 +65,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         num_envs: int = 1,
         scenario: Any = None,
         obs_type: str = "vector",
-        assist: bool | None = True,
+        assist: bool | None = None,
         reward_scale: float = 1.0,
         random_target: bool = False,
         arm_aware: bool = False,
@@ -77,13 +73,21 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         render_mode: str | None = None,
         copy: bool = True,
     ):
-        num_envs = check_positive_int("num_envs", num_envs)
         check_obs_type(obs_type, self._GOAL)
-        assist = check_optional_bool("assist", assist)
-        reward_scale = check_nonneg_float("reward_scale", reward_scale)
-        random_target = check_bool("random_target", random_target)
-        arm_aware = check_bool("arm_aware", arm_aware)
-        self.copy = check_bool("copy", copy)
+        # Every keyword against the core's one table (ENV_OPTIONS, rust/core/src/env.rs).
+        _core.check_options(
+            "env",
+            num_envs=num_envs,
+            assist=assist,
+            reward_scale=reward_scale,
+            random_target=random_target,
+            arm_aware=arm_aware,
+            max_episode_steps=max_episode_steps,
+            copy=copy,
+        )
+        num_envs, reward_scale = int(num_envs), float(reward_scale)
+        random_target, arm_aware, self.copy = bool(random_target), bool(arm_aware), bool(copy)
+        assist = None if assist is None else bool(assist)
         if render_mode is not None:
             raise invalid(
                 "render_mode",
@@ -94,7 +98,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         self.scenario = as_scenario(scenario)
         if max_episode_steps is None:
             max_episode_steps = self.scenario.max_steps_per_episode
-        max_episode_steps = check_positive_int("max_episode_steps", max_episode_steps)
+        _core.check_options("env", max_episode_steps=max_episode_steps)
+        max_episode_steps = int(max_episode_steps)
 
         self.num_envs = num_envs
         self.obs_type = obs_type
@@ -278,7 +283,7 @@ class SixAxisAvoidGoalVectorEnv(SixAxisAvoidVectorEnv):
         self,
         num_envs: int = 1,
         scenario: Any = None,
-        assist: bool | None = True,
+        assist: bool | None = None,
         reward_scale: float = 1.0,
         random_target: bool = False,
         arm_aware: bool = False,

@@ -159,7 +159,7 @@ flag_set!(
     /// The flags Algorithm 2 adds (`sixaxis plan`).
     PlanFlags,
     plan_only(),
-    vec![("learner", OptionValue::Text("qlearning".into()))]
+    [("learner", OptionValue::Text("qlearning".into()))]
 );
 flag_set!(
     /// The flags of `sixaxis generate` (the options of the scenario generator).

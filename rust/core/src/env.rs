@@ -57,6 +57,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::error::{Error, Result};
 use crate::grid::{base_reward_of, cell_distance, Assist, GridWorld, NUM_ACTIONS};
 use crate::kinematics::{Joints, TerminalPose};
+use crate::options::{check_value, Domain, OptionInfo, OptionValue};
 use crate::planner::PosePlanner;
 use crate::scenario::{Cell, Scenario};
 
@@ -99,6 +100,59 @@ impl Default for EnvOptions {
     }
 }
 
+/// The domain of `reward_scale`: a finite number >= 0.
+const REWARD_SCALE: Domain = Domain::Float {
+    min: 0.0,
+    max: f64::INFINITY,
+    open_min: false,
+};
+/// The domain of `num_envs`: 1 to 2^24 environments in one batch.
+const NUM_ENVS: Domain = Domain::Int {
+    min: 1,
+    max: 1 << 24,
+};
+
+const fn env_option(
+    key: &'static str,
+    domain: Domain,
+    unit: &'static str,
+    doc: &'static str,
+) -> OptionInfo {
+    OptionInfo {
+        key,
+        field: "",
+        domain,
+        unit,
+        doc,
+    }
+}
+
+/// The keywords of the Gymnasium envs (`SixAxisAvoid-v0` and its variants, the native vector
+/// env), declared once: the envs check every keyword against this table through the
+/// bindings, and [`EnvModel::new`] / [`BatchEnv::new`] check theirs with the same domains.
+/// `ENV_NULLABLE` names those that may also be `None`.
+pub static ENV_OPTIONS: [OptionInfo; 11] = [
+    env_option("obs_type", Domain::Choice(&["vector", "index"]), "", "The observation: `vector` (terminal, target and neighbour flags, float32) or `index` (the state number); the goal-conditioned Dict is the id SixAxisAvoidGoal-v0."),
+    env_option("assist", Domain::Bool, "", "The assisted strategies (eqs. 9 and 10) on or off; None: the scenario's `learning.assist_detour` / `learning.assist_distance` (docs/SCENARIOS.md, the `assist` default)."),
+    env_option("reward_scale", REWARD_SCALE, "", "Factor applied to every reward."),
+    env_option("random_target", Domain::Bool, "", "Draw the target from the free cells at every reset."),
+    env_option("arm_aware", Domain::Bool, "", "Cells no clear arm pose reaches count as obstacles."),
+    env_option("num_envs", NUM_ENVS, "envs", "Environments of the native vector env."),
+    env_option("max_episode_steps", Domain::u32_from(1), "steps", "Truncation after this many steps; None: the scenario's `learning.max_steps_per_episode`."),
+    env_option("render_mode", Domain::Choice(&["human", "rgb_array"]), "", "Gymnasium's render mode, or None."),
+    env_option("render_arm", Domain::Bool, "", "Draw the arm's clearest pose in the rendered frames."),
+    env_option("render_size", Domain::Int { min: 64, max: 4096 }, "pixels", "Edge of a rendered frame."),
+    env_option("copy", Domain::Bool, "", "Return copies of the vector env's observation buffers (Gymnasium's `copy`)."),
+];
+
+/// The keywords of [`ENV_OPTIONS`] that may be `None`.
+pub const ENV_NULLABLE: &[&str] = &["assist", "max_episode_steps", "render_mode"];
+
+/// The entry of [`ENV_OPTIONS`] for `key`.
+pub fn env_option_info(key: &str) -> Option<&'static OptionInfo> {
+    ENV_OPTIONS.iter().find(|i| i.key == key)
+}
+
 /// What every copy of an environment shares.
 #[derive(Debug)]
 pub struct EnvModel {
@@ -113,13 +167,11 @@ pub struct EnvModel {
 impl EnvModel {
     /// The model of a scenario with these options.
     pub fn new(scenario: &Scenario, opts: EnvOptions) -> Result<EnvModel> {
-        if !opts.reward_scale.is_finite() || opts.reward_scale < 0.0 {
-            return Err(Error::argument(
-                "reward_scale",
-                opts.reward_scale,
-                "must be a finite number >= 0",
-            ));
-        }
+        check_value(
+            "reward_scale",
+            &REWARD_SCALE,
+            &OptionValue::Float(opts.reward_scale),
+        )?;
         for (what, c) in [("start", scenario.start), ("target", scenario.target)] {
             if opts.extra_obstacles.contains(&c) {
                 return Err(Error::argument(
@@ -509,12 +561,12 @@ pub struct BatchEnv {
 impl BatchEnv {
     /// `n` environments of `model`, truncated after `max_episode_steps` steps.
     pub fn new(model: Arc<EnvModel>, n: usize, max_episode_steps: u32) -> Result<BatchEnv> {
-        if n == 0 {
-            return Err(Error::argument("num_envs", 0, "must be > 0"));
-        }
-        if max_episode_steps == 0 {
-            return Err(Error::argument("max_episode_steps", 0, "must be > 0"));
-        }
+        check_value("num_envs", &NUM_ENVS, &OptionValue::Int(n as i128))?;
+        check_value(
+            "max_episode_steps",
+            &Domain::u32_from(1),
+            &OptionValue::Int(max_episode_steps as i128),
+        )?;
         let ep = Episode::new(&model);
         Ok(BatchEnv {
             episodes: vec![ep; n],

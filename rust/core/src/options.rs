@@ -407,6 +407,21 @@ impl ToOption for String {
     }
 }
 
+/// Check `v` against `domain` (whatever its field's type); the error names `key` and `v`.
+pub fn check_value(key: &str, domain: &Domain, v: &OptionValue) -> Result<()> {
+    match domain {
+        Domain::Int { .. } => whole(key, domain, v).map(|_| ()),
+        Domain::IntOrAuto { .. } => match v {
+            OptionValue::Text(t) if t == "auto" => Ok(()),
+            _ => whole(key, domain, v).map(|_| ()),
+        },
+        Domain::Float { .. } => f64::from_option(key, domain, v).map(|_| ()),
+        Domain::Bool => bool::from_option(key, domain, v).map(|_| ()),
+        Domain::Choice(_) => choice(key, domain, v).map(|_| ()),
+        Domain::Text => String::from_option(key, domain, v).map(|_| ()),
+    }
+}
+
 /// The name `v` holds, if it is one of `domain`'s choices; for enums with serde names.
 pub fn choice<'a>(key: &str, domain: &Domain, v: &'a OptionValue) -> Result<&'a str> {
     match (domain, v) {

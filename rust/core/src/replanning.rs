@@ -333,9 +333,7 @@ pub fn plan(
     let learner: &mut dyn PathLearner = match learner {
         Some(l) => l,
         None => {
-            default_learner = QLearner {
-                opts: opts.train.clone(),
-            };
+            default_learner = QLearner { opts: opts.train };
             &mut default_learner
         }
     };

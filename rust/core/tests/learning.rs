@@ -479,7 +479,7 @@ fn converged_episode_matches_its_definition() {
     let full = train(&w, &o, None, None).unwrap();
     let conv = full.converged_episode.expect("converges") as u32;
     let path_after = |e: u32| {
-        let mut o2 = o.clone();
+        let mut o2 = o;
         o2.episodes = e + 1;
         let r = train(&w, &o2, None, None).unwrap();
         assert_eq!(
@@ -554,25 +554,16 @@ fn bad_options_and_wrong_table_are_errors() {
     let w = GridWorld::new(&sc).unwrap();
     let o = Learning::from_scenario(&sc);
     for bad in [
-        Learning {
-            episodes: 0,
-            ..o.clone()
-        },
-        Learning {
-            alpha: 0.0,
-            ..o.clone()
-        },
-        Learning {
-            gamma: 1.5,
-            ..o.clone()
-        },
+        Learning { episodes: 0, ..o },
+        Learning { alpha: 0.0, ..o },
+        Learning { gamma: 1.5, ..o },
         Learning {
             epsilon_start: -0.1,
-            ..o.clone()
+            ..o
         },
         Learning {
             max_steps_per_episode: 0,
-            ..o.clone()
+            ..o
         },
     ] {
         assert!(matches!(
@@ -805,7 +796,7 @@ fn resume_from_saved_table_is_deterministic() {
     r1.q.save(&path, &w).unwrap();
 
     // The second run: its own seed and its own epsilon schedule, counted from 0.
-    let mut second = first.clone();
+    let mut second = first;
     second.seed = 12;
     second.episodes = 1000;
     second.epsilon_start = 0.05;
@@ -842,7 +833,7 @@ fn resume_continues_learning_to_a_path() {
     let mut first = Learning::from_scenario(&sc);
     first.episodes = 5000;
     let r1 = train(&w, &first, None, None).unwrap();
-    let mut second = first.clone();
+    let mut second = first;
     second.seed = 1;
     second.epsilon_start = first.epsilon(5000);
     second.epsilon_decay_episodes = 4900;
@@ -913,23 +904,14 @@ fn f32_training_is_deterministic_and_takes_half_the_bytes() {
         .zip(v32)
         .all(|(x, y)| x.to_bits() == (*y as f64).to_bits()));
     assert!(v32.iter().filter(|v| **v != 0.0).count() > 100);
-    let c = train(
-        &w,
-        &Learning {
-            seed: 1,
-            ..o.clone()
-        },
-        None,
-        None,
-    )
-    .unwrap();
+    let c = train(&w, &Learning { seed: 1, ..o }, None, None).unwrap();
     assert_ne!(a.q, c.q);
     // 24 bytes of Q-values per state against 48; the default stays f64.
     let f64_run = train(
         &w,
         &Learning {
             q_precision: QPrecision::F64,
-            ..o.clone()
+            ..o
         },
         None,
         None,

@@ -252,9 +252,7 @@ fn default_learner_is_the_tabular_q_learner_bit_for_bit() {
     let s = Scenario::load("replan_clutter").unwrap();
     let o = PlanOptions::from_scenario(&s);
     let default = without_times(plan(&s, &o, None, None).unwrap());
-    let mut q = QLearner {
-        opts: o.train.clone(),
-    };
+    let mut q = QLearner { opts: o.train };
     let explicit = without_times(plan(&s, &o, Some(&mut q), None).unwrap());
     assert_eq!(default, explicit);
     assert!(default.replans >= 1);

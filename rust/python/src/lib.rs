@@ -57,6 +57,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env_core::PyVecEnvCore>()?;
     m.add_function(wrap_pyfunction!(train::train, m)?)?;
     m.add_function(wrap_pyfunction!(request::options, m)?)?;
+    m.add_function(wrap_pyfunction!(request::check_options, m)?)?;
     m.add_function(wrap_pyfunction!(train::load_q, m)?)?;
     m.add_function(wrap_pyfunction!(train::greedy_path_of, m)?)?;
     m.add_function(wrap_pyfunction!(train::shortest_path, m)?)?;

@@ -6,8 +6,9 @@
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString};
+use sixaxis_core::env::{env_option_info, ENV_NULLABLE, ENV_OPTIONS};
 use sixaxis_core::generator::{generator_options, GeneratorOptions, GENERATOR_OPTIONS};
-use sixaxis_core::options::{Domain, OptionInfo, OptionValue, Options};
+use sixaxis_core::options::{check_value, Domain, OptionInfo, OptionValue, Options};
 use sixaxis_core::request::{option_values, plan_options, train_options, TrainRequest};
 use sixaxis_core::Scenario;
 
@@ -242,4 +243,52 @@ pub fn options<'py>(
         out.append(d)?;
     }
     Ok(out)
+}
+
+/// Check the keywords of a Gymnasium env (``function="env"``) against the core's table
+/// (``ENV_OPTIONS``): each bad value raises :class:`InvalidArgumentError` naming the keyword
+/// and its ``repr``; ``None`` is accepted only where the table allows it. An unknown
+/// keyword is a ``TypeError``.
+#[pyfunction]
+#[pyo3(signature = (function, **kwargs))]
+pub fn check_options(
+    py: Python<'_>,
+    function: &str,
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<()> {
+    if function != "env" {
+        return Err(invalid_argument(
+            py,
+            "function",
+            function,
+            "must be \"env\"",
+        ));
+    }
+    let Some(kwargs) = kwargs else {
+        return Ok(());
+    };
+    for (k, v) in kwargs.iter() {
+        let key: String = k.extract()?;
+        let Some(info) = env_option_info(&key) else {
+            let keys: Vec<&str> = ENV_OPTIONS.iter().map(|i| i.key).collect();
+            return Err(PyTypeError::new_err(format!(
+                "got an unexpected keyword argument '{key}' (the env's keywords: {})",
+                keys.join(", ")
+            )));
+        };
+        let reason = match info.domain {
+            Domain::Bool => "must be True or False".to_string(),
+            d => d.reason(),
+        };
+        let bad = || invalid_argument(py, &key, repr(&v), reason.clone());
+        if v.is_none() {
+            if ENV_NULLABLE.contains(&key.as_str()) {
+                continue;
+            }
+            return Err(bad());
+        }
+        let value = value_of(py, info, &v).map_err(|_| bad())?.ok_or_else(bad)?;
+        check_value(&key, &info.domain, &value).map_err(|_| bad())?;
+    }
+    Ok(())
 }

@@ -13,9 +13,9 @@
 //! hex), `values_checksum` (FNV-1a 64 of the value bytes, hex) and `layout` (the same in
 //! words). Values are stored as raw bits, so a round trip is exact in either precision.
 //! [`QTable::load`] returns the table in the file's precision ([`train`] converts it to the
-//! run's). It answers [`Error::QTableMismatch`] when
+//! run's). It answers [`Error::QTableMismatch`](crate::Error::QTableMismatch) when
 //! bounds, target or blocked cells differ from the world's; a file that is not a Q-table,
-//! is truncated or fails its checksum gives an [`Error::Io`] of kind `InvalidData`.
+//! is truncated or fails its checksum gives an [`Error::Io`](crate::Error::Io) of kind `InvalidData`.
 //! Saving writes a temporary file in the same directory and renames it over the target;
 //! on any error the temporary file is removed.
 
@@ -73,7 +73,7 @@ impl QTable {
     }
 
     /// Read a table written by [`QTable::save`] and check it fits `world`
-    /// ([`Error::QTableMismatch`] if bounds, target or blocked cells differ).
+    /// ([`Error::QTableMismatch`](crate::Error::QTableMismatch) if bounds, target or blocked cells differ).
     pub fn load(path: &Path, world: &GridWorld) -> Result<QTable> {
         // A table of `world` is its values (at most 8 bytes each, f64) plus a header of a
         // few hundred bytes: reading no more than that keeps `/dev/zero` or a huge stray

@@ -6,13 +6,13 @@
 //! run). The options of a run are the scenario's [`Learning`] section.
 //!
 //! Entry points:
-//! - [`train`] — learn a [`QTable`] on a [`GridWorld`] with [`Learning`]; returns the
+//! - [`train`] — learn a [`QTable`] on a [`GridWorld`](crate::grid::GridWorld) with [`Learning`]; returns the
 //!   learned path, per-episode statistics and the converged episode ([`TrainResult`]).
 //! - [`greedy_path`] — the learned path (`place`, eq. 8) of a Q-table.
 //! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
 //! - [`QTable::save`] / [`QTable::load`] — atomic Q-table files, checked against the world.
 //! - [`QTable::zeros_with`] / [`QTable::precision`] / [`QTable::bytes_per_state`] — tables of
-//!   f64 (the default) or f32 values ([`QPrecision`]); values are read and written as f64.
+//!   f64 (the default) or f32 values ([`QPrecision`](crate::scenario::QPrecision)); values are read and written as f64.
 //!
 //! ```
 //! use sixaxis_core::grid::GridWorld;

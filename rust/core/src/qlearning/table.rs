@@ -1,5 +1,5 @@
 //! The Q-table: `num_states` rows of six actions, stored as f64 (the default) or f32
-//! ([`QPrecision`]); every accessor reads and writes the values as f64.
+//! ([`QPrecision`](crate::scenario::QPrecision)); every accessor reads and writes the values as f64.
 //!
 //! Entry points: [`QTable::zeros_with`], [`QTable::from_values`] /
 //! [`QTable::from_values_f32`], [`QTable::get`] / [`QTable::set`], [`QTable::into_precision`].
@@ -9,7 +9,7 @@ use crate::grid::NUM_ACTIONS;
 use crate::scenario::QPrecision;
 
 /// Q-values: `num_states` rows of six actions, stored as f64 (the default) or f32
-/// ([`QPrecision`]); every accessor reads and writes them as f64.
+/// ([`QPrecision`](crate::scenario::QPrecision)); every accessor reads and writes them as f64.
 #[derive(Debug, Clone, PartialEq)]
 pub struct QTable {
     pub(super) rows: Rows,

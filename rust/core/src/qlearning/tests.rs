@@ -152,7 +152,7 @@ fn initial_q_rule_and_explicit_table() {
         episodes: 1,
         initial_q: InitialQ::Distance,
         epsilon_start: 0.0,
-        ..zero.clone()
+        ..zero
     };
     // One purely greedy episode from the distance table changes only the rows it visits.
     let r = train(&w, &dist, None, None).unwrap();
@@ -168,7 +168,7 @@ fn initial_q_rule_and_explicit_table() {
         &w,
         &Learning {
             initial_q: InitialQ::Zero,
-            ..dist.clone()
+            ..dist
         },
         None,
         None,
