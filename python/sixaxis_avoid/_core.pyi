@@ -32,6 +32,7 @@ __all__ = [
     "_raise_core_error",
     "cells_reachable",
     "centres_clearance_cells",
+    "check_options",
     "clear_pose_at",
     "expand_names",
     "export_scenario",
@@ -216,6 +217,7 @@ def train(
     episode_cap: int | None = None,
     # <<< options:train
 ) -> TrainResult: ...
+def check_options(function: Literal["env"], **kwargs: Any) -> None: ...
 def options(
     function: Literal["train", "plan", "generate_scenario"] = "train",
     scenario: _ScenarioLike = None,
