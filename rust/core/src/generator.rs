@@ -22,7 +22,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::grid::GridWorld;
-use crate::options::{apply, Domain, FromOption, OptionInfo, OptionSpec, Options, ToOption};
+use crate::options::{
+    apply, check_all, Domain, FromOption, OptionInfo, OptionSpec, Options, ToOption,
+};
 use crate::planner::PosePlanner;
 use crate::scenario::{Bounds, Cell, PoseSearchMode, Scenario};
 
@@ -174,10 +176,7 @@ impl GeneratorOptions {
 
     /// Check every keyed option against its domain; the error names the key.
     pub fn check(&self) -> Result<()> {
-        for spec in &GENERATOR_OPTIONS {
-            (spec.set)(&mut self.clone(), spec.info.key, &(spec.get)(self))?;
-        }
-        Ok(())
+        check_all(&GENERATOR_OPTIONS, self, |i| i.key)
     }
 }
 

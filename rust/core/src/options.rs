@@ -269,17 +269,8 @@ impl<T> fmt::Debug for OptionSpec<T> {
 /// rule that combines options, such as `assist` before `detour`, is the table's order);
 /// a key of `values` that no option of `table` has is an error that lists the keys.
 pub fn apply<T>(table: &[&OptionSpec<T>], values: &Options, target: &mut T) -> Result<()> {
-    if let Some(unknown) = values
-        .keys()
-        .find(|k| !table.iter().any(|s| s.info.key == k.as_str()))
-    {
-        let keys: Vec<&str> = table.iter().map(|s| s.info.key).collect();
-        return Err(Error::argument(
-            unknown.as_str(),
-            &values[unknown],
-            format!("is no option here; the options are {}", keys.join(", ")),
-        ));
-    }
+    let keys: Vec<&str> = table.iter().map(|s| s.info.key).collect();
+    reject_unknown(&keys, values)?;
     for spec in table {
         if let Some(v) = values.get(spec.info.key) {
             (spec.set)(target, spec.info.key, v)?;
@@ -291,23 +282,45 @@ pub fn apply<T>(table: &[&OptionSpec<T>], values: &Options, target: &mut T) -> R
 /// Check every field of `target` that `table` declares against its domain; the error is an
 /// [`Error::InvalidScenario`] naming the scenario field.
 pub fn check_fields<T: Clone>(table: &[OptionSpec<T>], target: &T) -> Result<()> {
+    let fields = table.iter().filter(|s| !s.info.field.is_empty());
+    check_all(fields, target, |i| i.field).map_err(|e| match e {
+        Error::InvalidArgument {
+            name,
+            value,
+            reason,
+        } => Error::InvalidScenario {
+            field: name,
+            value,
+            reason,
+        },
+        other => other,
+    })
+}
+
+/// Check every option of `specs` as it stands in `target` against its domain (its value
+/// read and set again on a copy); the error names the option by `name_of`.
+pub fn check_all<'a, T: Clone + 'static>(
+    specs: impl IntoIterator<Item = &'a OptionSpec<T>>,
+    target: &T,
+    name_of: impl Fn(&OptionInfo) -> &'static str,
+) -> Result<()> {
     let mut copy = target.clone();
-    for spec in table.iter().filter(|s| !s.info.field.is_empty()) {
-        let v = (spec.get)(target);
-        (spec.set)(&mut copy, spec.info.field, &v).map_err(|e| match e {
-            Error::InvalidArgument {
-                name,
-                value,
-                reason,
-            } => Error::InvalidScenario {
-                field: name,
-                value,
-                reason,
-            },
-            other => other,
-        })?;
+    for spec in specs {
+        (spec.set)(&mut copy, name_of(&spec.info), &(spec.get)(target))?;
     }
     Ok(())
+}
+
+/// The error for the first key of `values` that is not one of `keys`, listing them.
+pub fn reject_unknown(keys: &[&str], values: &Options) -> Result<()> {
+    match values.keys().find(|k| !keys.contains(&k.as_str())) {
+        Some(unknown) => Err(Error::argument(
+            unknown.as_str(),
+            &values[unknown],
+            format!("is no option here; the options are {}", keys.join(", ")),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// A checked conversion of an [`OptionValue`] to a field's type.

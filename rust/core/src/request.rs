@@ -38,7 +38,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::options::{
-    apply, named_enum, Domain, FromOption, OptionInfo, OptionSpec, OptionValue, Options,
+    apply, named_enum, reject_unknown, Domain, FromOption, OptionInfo, OptionSpec, OptionValue,
+    Options,
 };
 use crate::replanning::PlanOptions;
 use crate::scenario::{Learning, Scenario, AUTO_EPISODE_CAP};
@@ -211,17 +212,8 @@ impl PlanRequest {
         let is_plan = |k: &str| plan_only.iter().any(|p| p.info.key == k);
         let (mine, train): (Options, Options) =
             self.0.clone().into_iter().partition(|(k, _)| is_plan(k));
-        if let Some(unknown) = train
-            .keys()
-            .find(|k| !train_table().iter().any(|t| t.info.key == k.as_str()))
-        {
-            let keys: Vec<&str> = plan_options().iter().map(|i| i.key).collect();
-            return Err(Error::argument(
-                unknown.as_str(),
-                &train[unknown],
-                format!("is no option here; the options are {}", keys.join(", ")),
-            ));
-        }
+        let keys: Vec<&str> = plan_options().iter().map(|i| i.key).collect();
+        reject_unknown(&keys, &self.0)?;
         let mut target = (PlanOptions::from_scenario(s), LearnerKind::default());
         target.0.train = TrainRequest(train).resolve(s)?;
         apply(&plan_only, &mine, &mut target)?;

@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::kinematics::{Arm, DhRow, PAPER_BETA0_DEG, PAPER_DH};
-use crate::options::{named_enum, option_set, Domain, FromOption, OptionValue};
+use crate::options::{check_all, named_enum, option_set, Domain, FromOption, OptionValue};
 
 /// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.
 pub type Cell = [i32; 3];
@@ -331,16 +331,13 @@ impl Learning {
 
     /// Check the ranges; the error names the option.
     pub fn validate(&self) -> Result<()> {
-        for spec in Self::OPTIONS {
-            let v = (spec.get)(self);
-            let key = if spec.info.key.is_empty() {
-                spec.info.field
+        check_all(Self::OPTIONS, self, |i| {
+            if i.key.is_empty() {
+                i.field
             } else {
-                spec.info.key
-            };
-            (spec.set)(&mut self.clone(), key, &v)?;
-        }
-        Ok(())
+                i.key
+            }
+        })
     }
 
     /// Exploration rate of episode `episode` (counted from 0), eq. 7.
