@@ -50,19 +50,18 @@ def check_obs_type(obs_type: Any, goal: bool) -> str:
             raise invalid("obs_type", obs_type, 'must be "goal" on the goal envs')
         return obs_type
     refuse_goal_obs_type(obs_type)
-    _core.check_options("env", obs_type=obs_type)
-    return obs_type
+    return check_keywords(obs_type=obs_type)["obs_type"]
 
 
-def check_keywords(**keywords: Any) -> None:
-    """Check env keywords against the core's one table (ENV_OPTIONS, rust/core/src/env.rs):
-    a bad value raises InvalidArgumentError naming the keyword and the value."""
-    _core.check_options("env", **keywords)
+def check_keywords(**keywords: Any) -> dict[str, Any]:
+    """Env keywords checked against the core's one table (ENV_OPTIONS, rust/core/src/env.rs)
+    and returned as plain values: a bad value raises InvalidArgumentError naming the keyword
+    and the value."""
+    return _core.check_options("env", **keywords)
 
 
 def check_render_size(render_size: Any) -> int:
-    _core.check_options("env", render_size=render_size)
-    return int(render_size)
+    return check_keywords(render_size=render_size)["render_size"]
 
 
 def check_random_target(obs_type: str, random_target: bool) -> None:
@@ -204,9 +203,7 @@ class SixAxisAvoidEnv(gym.Env):
         render_size: int = 512,
     ):
         check_obs_type(obs_type, self._GOAL)
-        # Every keyword against the core's one table (ENV_OPTIONS, rust/core/src/env.rs).
-        _core.check_options(
-            "env",
+        kw = check_keywords(
             assist=assist,
             reward_scale=reward_scale,
             random_target=random_target,
@@ -215,13 +212,8 @@ class SixAxisAvoidEnv(gym.Env):
             render_arm=render_arm,
             render_size=render_size,
         )
-        reward_scale = float(reward_scale)
-        random_target, arm_aware, render_arm = (
-            bool(random_target),
-            bool(arm_aware),
-            bool(render_arm),
-        )
-        assist = None if assist is None else bool(assist)
+        assist, reward_scale, random_target = kw["assist"], kw["reward_scale"], kw["random_target"]
+        arm_aware, render_arm = kw["arm_aware"], kw["render_arm"]
         check_random_target(obs_type, random_target)
         if render_mode == "human":
             # Fail at construction, not at the first frame, if Matplotlib is missing.

@@ -111,9 +111,9 @@ class SixAxisVecEnv(VecEnv):
     ):
         render_mode = env_kwargs.pop("render_mode", None)
         check_choice("render_mode", render_mode, (None, "rgb_array"))
-        render_arm = env_kwargs.pop("render_arm", False)
-        check_keywords(render_arm=render_arm)
-        self.render_arm = bool(render_arm)
+        self.render_arm = check_keywords(render_arm=env_kwargs.pop("render_arm", False))[
+            "render_arm"
+        ]
         render_size = env_kwargs.pop("render_size", 512)
         # Checked now, as the single env does, though only rendering uses it.
         self._render_size = check_render_size(render_size)

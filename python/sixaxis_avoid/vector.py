@@ -18,6 +18,7 @@ from sixaxis_avoid._checks import (
 from sixaxis_avoid._goal import GoalRewards, goal_dict, goal_to_cell
 from sixaxis_avoid.env import (
     as_scenario,
+    check_keywords,
     check_obs_type,
     check_random_target,
     observation_space_of,
@@ -74,9 +75,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         copy: bool = True,
     ):
         check_obs_type(obs_type, self._GOAL)
-        # Every keyword against the core's one table (ENV_OPTIONS, rust/core/src/env.rs).
-        _core.check_options(
-            "env",
+        kw = check_keywords(
             num_envs=num_envs,
             assist=assist,
             reward_scale=reward_scale,
@@ -85,9 +84,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             max_episode_steps=max_episode_steps,
             copy=copy,
         )
-        num_envs, reward_scale = int(num_envs), float(reward_scale)
-        random_target, arm_aware, self.copy = bool(random_target), bool(arm_aware), bool(copy)
-        assist = None if assist is None else bool(assist)
+        num_envs, assist, reward_scale = kw["num_envs"], kw["assist"], kw["reward_scale"]
+        random_target, arm_aware, self.copy = kw["random_target"], kw["arm_aware"], kw["copy"]
         if render_mode is not None:
             raise invalid(
                 "render_mode",
@@ -98,8 +96,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         self.scenario = as_scenario(scenario)
         if max_episode_steps is None:
             max_episode_steps = self.scenario.max_steps_per_episode
-        _core.check_options("env", max_episode_steps=max_episode_steps)
-        max_episode_steps = int(max_episode_steps)
+        max_episode_steps = check_keywords(max_episode_steps=max_episode_steps)["max_episode_steps"]
 
         self.num_envs = num_envs
         self.obs_type = obs_type

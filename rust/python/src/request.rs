@@ -246,16 +246,17 @@ pub fn options<'py>(
 }
 
 /// Check the keywords of a Gymnasium env (``function="env"``) against the core's table
-/// (``ENV_OPTIONS``): each bad value raises :class:`InvalidArgumentError` naming the keyword
-/// and its ``repr``; ``None`` is accepted only where the table allows it. An unknown
-/// keyword is a ``TypeError``.
+/// (``ENV_OPTIONS``) and return them as a dict of plain values (``bool``, ``int``,
+/// ``float``, ``str`` or ``None``): each bad value raises :class:`InvalidArgumentError`
+/// naming the keyword and its ``repr``; ``None`` is accepted only where the table allows
+/// it. An unknown keyword is a ``TypeError``.
 #[pyfunction]
 #[pyo3(signature = (function, **kwargs))]
-pub fn check_options(
-    py: Python<'_>,
+pub fn check_options<'py>(
+    py: Python<'py>,
     function: &str,
-    kwargs: Option<&Bound<'_, PyDict>>,
-) -> PyResult<()> {
+    kwargs: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
     if function != "env" {
         return Err(invalid_argument(
             py,
@@ -264,8 +265,9 @@ pub fn check_options(
             "must be \"env\"",
         ));
     }
+    let out = PyDict::new(py);
     let Some(kwargs) = kwargs else {
-        return Ok(());
+        return Ok(out);
     };
     for (k, v) in kwargs.iter() {
         let key: String = k.extract()?;
@@ -283,12 +285,19 @@ pub fn check_options(
         let bad = || invalid_argument(py, &key, repr(&v), reason.clone());
         if v.is_none() {
             if ENV_NULLABLE.contains(&key.as_str()) {
+                out.set_item(&key, py.None())?;
                 continue;
             }
             return Err(bad());
         }
         let value = value_of(py, info, &v).map_err(|_| bad())?.ok_or_else(bad)?;
         check_value(&key, &info.domain, &value).map_err(|_| bad())?;
+        // A whole number given for a float option is that float.
+        let value = match (&info.domain, value) {
+            (Domain::Float { .. }, OptionValue::Int(i)) => OptionValue::Float(i as f64),
+            (_, value) => value,
+        };
+        out.set_item(&key, value_to_py(py, &value)?)?;
     }
-    Ok(())
+    Ok(out)
 }
