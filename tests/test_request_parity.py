@@ -263,3 +263,32 @@ def test_stub_and_docs_follow_the_declaration():
         timeout=120,
     )
     assert proc.returncode == 0, proc.stderr
+
+
+def test_env_signatures_give_the_core_tables_defaults():
+    """Every env keyword's default is declared once, in the core's table (ENV_OPTIONS); the
+    Gymnasium envs' signatures repeat it for users' IDEs, and must agree with it."""
+    import inspect
+
+    from sixaxis_avoid.env import ENV_DEFAULTS, SixAxisAvoidEnv, SixAxisAvoidGoalEnv
+    from sixaxis_avoid.vector import SixAxisAvoidGoalVectorEnv, SixAxisAvoidVectorEnv
+
+    rows = {o["key"]: o for o in sa.options("env")}
+    assert set(rows) == set(ENV_DEFAULTS)
+    assert ENV_DEFAULTS["assist"] is None and ENV_DEFAULTS["reward_scale"] == 1.0
+    checked = 0
+    for cls in (
+        SixAxisAvoidEnv,
+        SixAxisAvoidGoalEnv,
+        SixAxisAvoidVectorEnv,
+        SixAxisAvoidGoalVectorEnv,
+    ):
+        params = inspect.signature(cls.__init__).parameters
+        for key, p in params.items():
+            if key in rows:
+                assert p.default == ENV_DEFAULTS[key], (cls.__name__, key, p.default)
+                assert type(p.default) is type(ENV_DEFAULTS[key]), (cls.__name__, key)
+                checked += 1
+        # Every table keyword a class takes is a parameter (or fixed, as obs_type="goal").
+        assert {"assist", "reward_scale", "random_target", "arm_aware"} <= set(params)
+    assert checked >= 30

@@ -53,6 +53,12 @@ def check_obs_type(obs_type: Any, goal: bool) -> str:
     return check_keywords(obs_type=obs_type)["obs_type"]
 
 
+#: Each env keyword's default, from the core's one table (``_core.options("env")``; None where
+#: the scenario or Gymnasium decides). The envs' signatures give the same defaults (checked by
+#: tests/test_request_parity.py).
+ENV_DEFAULTS: dict[str, Any] = {o["key"]: o["default"] for o in _core.options("env")}
+
+
 def check_keywords(**keywords: Any) -> dict[str, Any]:
     """Env keywords checked against the core's one table (ENV_OPTIONS, rust/core/src/env/mod.rs)
     and returned as plain values: a bad value raises InvalidArgumentError naming the keyword

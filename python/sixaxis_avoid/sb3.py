@@ -33,7 +33,7 @@ import numpy as np
 from sixaxis_avoid._checks import check_choice, invalid
 from sixaxis_avoid._deps import require
 from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
-from sixaxis_avoid.env import check_keywords, check_render_size
+from sixaxis_avoid.env import ENV_DEFAULTS, check_keywords, check_render_size
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
 _vec_env = require("stable_baselines3.common.vec_env", "sixaxis_avoid.sb3")
@@ -109,12 +109,12 @@ class SixAxisVecEnv(VecEnv):
         env_id: str = ENV_ID,
         **env_kwargs: Any,
     ):
-        render_mode = env_kwargs.pop("render_mode", None)
+        render_mode = env_kwargs.pop("render_mode", ENV_DEFAULTS["render_mode"])
         check_choice("render_mode", render_mode, (None, "rgb_array"))
-        self.render_arm = check_keywords(render_arm=env_kwargs.pop("render_arm", False))[
-            "render_arm"
-        ]
-        render_size = env_kwargs.pop("render_size", 512)
+        self.render_arm = check_keywords(
+            render_arm=env_kwargs.pop("render_arm", ENV_DEFAULTS["render_arm"])
+        )["render_arm"]
+        render_size = env_kwargs.pop("render_size", ENV_DEFAULTS["render_size"])
         # Checked now, as the single env does, though only rendering uses it.
         self._render_size = check_render_size(render_size)
         cls, defaults = _vector_env_class(env_id)

@@ -179,7 +179,8 @@ fn value_to_py<'py>(py: Python<'py>, v: &OptionValue) -> PyResult<Bound<'py, PyA
 }
 
 /// The options of :func:`train` (``"train"``), :func:`plan` (``"plan"``) or
-/// :func:`generate_scenario` (``"generate_scenario"``; defaults its own) as a list of
+/// :func:`generate_scenario` (``"generate_scenario"``; defaults its own) or of the
+/// Gymnasium envs (``"env"``: their keywords, ``default`` None where None is the default) as a list of
 /// dicts, one per keyword, in the order they apply: ``key``, ``field`` (the scenario field
 /// it overrides, or ``""``), ``kind`` (``int``, ``int|auto``, ``float``, ``bool``,
 /// ``choice``), ``min``/``max`` (numbers), ``choices`` (names), ``unit``, ``doc`` and
@@ -196,6 +197,13 @@ pub fn options<'py>(
         .as_ref()
         .clone();
     let (infos, defaults) = match function {
+        "env" => (
+            ENV_OPTIONS.iter().map(|o| o.info).collect(),
+            ENV_OPTIONS
+                .iter()
+                .filter_map(|o| o.default.value().map(|v| (o.key, v)))
+                .collect(),
+        ),
         "train" => (train_options(), option_values(&s)),
         "plan" => (plan_options(), option_values(&s)),
         "generate_scenario" => (
@@ -210,7 +218,7 @@ pub fn options<'py>(
                 py,
                 "function",
                 other,
-                "must be \"train\", \"plan\" or \"generate_scenario\"",
+                "must be \"train\", \"plan\", \"generate_scenario\" or \"env\"",
             ))
         }
     };

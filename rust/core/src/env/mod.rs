@@ -93,12 +93,21 @@ pub struct EnvOptions {
     pub extra_obstacles: Vec<Cell>,
 }
 
-impl Default for EnvOptions {
-    fn default() -> Self {
+impl EnvOptions {
+    /// The options an env of scenario `s` gets when no keyword is given: each default of
+    /// [`ENV_OPTIONS`]; `assist` None means the scenario's `learning.assist_detour` /
+    /// `learning.assist_distance` (docs/SCENARIOS.md, the `assist` default); no extra
+    /// obstacles.
+    pub fn for_scenario(s: &Scenario) -> EnvOptions {
+        let flag = |key| matches!(env_option_default(key), Some(EnvDefault::Bool(true)));
+        let reward_scale = match env_option_default("reward_scale") {
+            Some(EnvDefault::Float(x)) => x,
+            other => unreachable!("reward_scale's default is a number, not {other:?}"),
+        };
         EnvOptions {
-            assist: Assist::on(),
-            reward_scale: 1.0,
-            random_target: false,
+            assist: Assist::from_scenario(s),
+            reward_scale,
+            random_target: flag("random_target"),
             extra_obstacles: Vec::new(),
         }
     }
@@ -116,45 +125,99 @@ const NUM_ENVS: Domain = Domain::Int {
     max: 1 << 24,
 };
 
+/// The default of an env keyword.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EnvDefault {
+    /// `None`: left to the scenario or to Gymnasium (the keyword is nullable).
+    None,
+    /// A bool.
+    Bool(bool),
+    /// A whole number.
+    Int(i64),
+    /// A number.
+    Float(f64),
+    /// A name.
+    Text(&'static str),
+}
+
+impl EnvDefault {
+    /// The default as an option value (`None` for [`EnvDefault::None`]).
+    pub fn value(self) -> Option<OptionValue> {
+        match self {
+            EnvDefault::None => None,
+            EnvDefault::Bool(b) => Some(OptionValue::Bool(b)),
+            EnvDefault::Int(i) => Some(OptionValue::Int(i as i128)),
+            EnvDefault::Float(x) => Some(OptionValue::Float(x)),
+            EnvDefault::Text(t) => Some(OptionValue::Text(t.to_string())),
+        }
+    }
+}
+
+/// An env keyword: its [`OptionInfo`] (key, domain, unit, doc) and its default.
+#[derive(Debug, Clone, Copy)]
+pub struct EnvOption {
+    /// Key, domain, unit and doc line.
+    pub info: OptionInfo,
+    /// What an env built without the keyword gets.
+    pub default: EnvDefault,
+}
+
+impl std::ops::Deref for EnvOption {
+    type Target = OptionInfo;
+    fn deref(&self) -> &OptionInfo {
+        &self.info
+    }
+}
+
 const fn env_option(
     key: &'static str,
     domain: Domain,
+    default: EnvDefault,
     unit: &'static str,
     doc: &'static str,
-) -> OptionInfo {
-    OptionInfo {
-        key,
-        field: "",
-        domain,
-        unit,
-        doc,
+) -> EnvOption {
+    EnvOption {
+        info: OptionInfo {
+            key,
+            field: "",
+            domain,
+            unit,
+            doc,
+        },
+        default,
     }
 }
 
 /// The keywords of the Gymnasium envs (`SixAxisAvoid-v0` and its variants, the native vector
 /// env), declared once: the envs check every keyword against this table through the
 /// bindings, and [`EnvModel::new`] / [`BatchEnv::new`] check theirs with the same domains.
-/// `ENV_NULLABLE` names those that may also be `None`.
-pub static ENV_OPTIONS: [OptionInfo; 11] = [
-    env_option("obs_type", Domain::Choice(&["vector", "index"]), "", "The observation: `vector` (terminal, target and neighbour flags, float32) or `index` (the state number); the goal-conditioned Dict is the id SixAxisAvoidGoal-v0."),
-    env_option("assist", Domain::Bool, "", "The assisted strategies (eqs. 9 and 10) on or off; None: the scenario's `learning.assist_detour` / `learning.assist_distance` (docs/SCENARIOS.md, the `assist` default)."),
-    env_option("reward_scale", REWARD_SCALE, "", "Factor applied to every reward."),
-    env_option("random_target", Domain::Bool, "", "Draw the target from the free cells at every reset."),
-    env_option("arm_aware", Domain::Bool, "", "Cells no clear arm pose reaches count as obstacles."),
-    env_option("num_envs", NUM_ENVS, "envs", "Environments of the native vector env."),
-    env_option("max_episode_steps", Domain::u32_from(1), "steps", "Truncation after this many steps; None: the scenario's `learning.max_steps_per_episode`."),
-    env_option("render_mode", Domain::Choice(&["human", "rgb_array"]), "", "Gymnasium's render mode, or None."),
-    env_option("render_arm", Domain::Bool, "", "Draw the arm's clearest pose in the rendered frames."),
-    env_option("render_size", Domain::Int { min: 64, max: 4096 }, "pixels", "Edge of a rendered frame."),
-    env_option("copy", Domain::Bool, "", "Return copies of the vector env's observation buffers (Gymnasium's `copy`)."),
+/// Each line gives the keyword's default; `ENV_NULLABLE` names those that may also be `None`.
+pub static ENV_OPTIONS: [EnvOption; 11] = [
+    env_option("obs_type", Domain::Choice(&["vector", "index"]), EnvDefault::Text("vector"), "", "The observation: `vector` (terminal, target and neighbour flags, float32) or `index` (the state number); the goal-conditioned Dict is the id SixAxisAvoidGoal-v0."),
+    env_option("assist", Domain::Bool, EnvDefault::None, "", "The assisted strategies (eqs. 9 and 10) on or off; None: the scenario's `learning.assist_detour` / `learning.assist_distance` (docs/SCENARIOS.md, the `assist` default)."),
+    env_option("reward_scale", REWARD_SCALE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
+    env_option("random_target", Domain::Bool, EnvDefault::Bool(false), "", "Draw the target from the free cells at every reset."),
+    env_option("arm_aware", Domain::Bool, EnvDefault::Bool(false), "", "Cells no clear arm pose reaches count as obstacles."),
+    env_option("num_envs", NUM_ENVS, EnvDefault::Int(1), "envs", "Environments of the native vector env."),
+    env_option("max_episode_steps", Domain::u32_from(1), EnvDefault::None, "steps", "Truncation after this many steps; None: the scenario's `learning.max_steps_per_episode`."),
+    env_option("render_mode", Domain::Choice(&["human", "rgb_array"]), EnvDefault::None, "", "Gymnasium's render mode, or None."),
+    env_option("render_arm", Domain::Bool, EnvDefault::Bool(false), "", "Draw the arm's clearest pose in the rendered frames."),
+    env_option("render_size", Domain::Int { min: 64, max: 4096 }, EnvDefault::Int(512), "pixels", "Edge of a rendered frame."),
+    env_option("copy", Domain::Bool, EnvDefault::Bool(true), "", "Return copies of the vector env's observation buffers (Gymnasium's `copy`)."),
 ];
 
-/// The keywords of [`ENV_OPTIONS`] that may be `None`.
+/// The keywords of [`ENV_OPTIONS`] that may be `None`: those whose default is
+/// [`EnvDefault::None`] (a unit test checks the two agree).
 pub const ENV_NULLABLE: &[&str] = &["assist", "max_episode_steps", "render_mode"];
 
 /// The entry of [`ENV_OPTIONS`] for `key`.
 pub fn env_option_info(key: &str) -> Option<&'static OptionInfo> {
-    ENV_OPTIONS.iter().find(|i| i.key == key)
+    ENV_OPTIONS.iter().find(|o| o.key == key).map(|o| &o.info)
+}
+
+/// The default of the env keyword `key` (None: no such keyword).
+pub fn env_option_default(key: &str) -> Option<EnvDefault> {
+    ENV_OPTIONS.iter().find(|o| o.key == key).map(|o| o.default)
 }
 
 /// What every copy of an environment shares.

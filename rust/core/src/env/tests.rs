@@ -11,7 +11,7 @@ fn model(random_target: bool) -> Arc<EnvModel> {
             &s,
             EnvOptions {
                 random_target,
-                ..EnvOptions::default()
+                ..EnvOptions::for_scenario(&s)
             },
         )
         .unwrap(),
@@ -71,7 +71,7 @@ fn goal_rewards_equal_step_rewards_to_the_bit() {
                 random_target,
                 assist,
                 reward_scale: scale,
-                ..EnvOptions::default()
+                ..EnvOptions::for_scenario(&s)
             },
         )
         .unwrap();
@@ -148,7 +148,7 @@ fn arm_aware_cells() {
         &s,
         EnvOptions {
             extra_obstacles: cells.clone(),
-            ..EnvOptions::default()
+            ..EnvOptions::for_scenario(&s)
         },
     )
     .unwrap();
@@ -196,4 +196,22 @@ fn batch_truncates_and_autoresets_next_step() {
     assert_eq!(r, vec![0.0; n]);
     assert!(b.episodes().iter().all(|e| e.steps() == 0));
     assert!(b.step(&[6u8, 0, 0], bufs!()).is_err());
+}
+
+#[test]
+fn env_defaults_are_in_their_domains_and_none_exactly_for_the_nullable_keywords() {
+    for o in &ENV_OPTIONS {
+        match o.default.value() {
+            None => assert!(ENV_NULLABLE.contains(&o.key), "{} defaults to None", o.key),
+            Some(v) => {
+                assert!(!ENV_NULLABLE.contains(&o.key), "{} is nullable", o.key);
+                check_value(o.key, &o.domain, &v).unwrap();
+            }
+        }
+    }
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let opts = EnvOptions::for_scenario(&s);
+    assert_eq!(opts.assist, Assist::from_scenario(&s));
+    assert_eq!(opts.reward_scale, 1.0);
+    assert!(!opts.random_target && opts.extra_obstacles.is_empty());
 }
