@@ -33,8 +33,9 @@
 //!
 //! # Layout
 //!
-//! `S` is the number of states (cells inside the bounds, [`GridWorld::state_of`]), `T` the
-//! number of targets: 1 (the scenario's) for fixed-target tasks, the candidate targets
+//! `S` is the number of states (cells inside the bounds, numbered as
+//! [`GridWorld::state_of`](crate::grid::GridWorld::state_of) does), `T` the number of
+//! targets: 1 (the scenario's) for fixed-target tasks, the candidate targets
 //! ([`EnvModel::target_candidates`], free cells other than the start, in state order) with
 //! `random_target`. Every array is flat, row-major; shapes below.
 //!
@@ -49,7 +50,8 @@
 //! - `reward = rewards[t, next, k]` (`(T, S, 4)`, `f32`): `(eq. 5 + eq. 10 + eq. 9) *
 //!   reward_scale` exactly as [`Episode::step`](crate::env::Episode::step) computes it in
 //!   `f64` ([`base_reward_of`] with the target's `d_o` and `d_t`, then
-//!   [`GridWorld::detour_penalty`]), rounded to the nearest `f32`;
+//!   [`GridWorld::detour_penalty`](crate::grid::GridWorld::detour_penalty)), rounded to the
+//!   nearest `f32`;
 //! - `terminated = terminates[t, next, k]` (`(T, S, 4)`, bool): the move reached the target
 //!   (never on a collision);
 //! - `m' = next_memory[a, collided]` (`(6, 2)`);
@@ -77,7 +79,7 @@ use crate::env::{
     OBS_TERMINAL, VECTOR_OBS_DIM,
 };
 use crate::error::{Error, Result};
-use crate::grid::{base_reward_of, GridWorld, NUM_ACTIONS};
+use crate::grid::{base_reward_of, NUM_ACTIONS};
 use crate::options::{check_value, reject_unknown, OptionValue, Options};
 use crate::request::TrainRequest;
 use crate::scenario::Scenario;
@@ -364,7 +366,7 @@ mod tests {
 
     use super::*;
     use crate::env::{BatchBuffers, BatchEnv, ObsBuffer};
-    use crate::grid::Assist;
+    use crate::grid::{Assist, GridWorld};
 
     fn options(pairs: &[(&str, OptionValue)]) -> Options {
         pairs
