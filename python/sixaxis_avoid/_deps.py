@@ -20,6 +20,8 @@ EXTRAS = {
     "mujoco": "mujoco",
     "yourdfpy": "urdf",
     "stable_baselines3": "sb3",
+    "jax": "jax",
+    "jaxlib": "jax",
 }
 
 

@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sixaxis_core::env::ENV_OPTIONS;
 use sixaxis_core::options::OptionInfo;
-use sixaxis_core::tables::{EnvTables, NUM_CASES, NUM_MEMORIES, TABLE_KEYS};
+use sixaxis_core::tables::{EnvTables, NO_MEMORY, NUM_CASES, NUM_MEMORIES, TABLE_KEYS};
 
 use crate::errors::run;
 use crate::request::options_of;
@@ -64,5 +64,6 @@ pub fn env_tables<'py>(
         array(py, vec![t.max_episode_steps as i64], &[])?,
     )?;
     d.set_item("random_target", array(py, vec![t.random_target], &[])?)?;
+    d.set_item("no_memory", array(py, vec![NO_MEMORY], &[])?)?;
     Ok(d)
 }
