@@ -164,9 +164,7 @@ class SixAxisAvoidJax:
         truncated = jnp.logical_and(
             jnp.logical_not(terminated), time >= params.max_steps_in_episode
         )
-        new = EnvState(
-            state=nxt, memory=params.next_memory[a, c], target=state.target, time=time
-        )
+        new = EnvState(state=nxt, memory=params.next_memory[a, c], target=state.target, time=time)
         info = {
             "terminated": terminated,
             "truncated": truncated,
@@ -191,9 +189,7 @@ class SixAxisAvoidJax:
         key, key_reset = jax.random.split(key)
         obs_st, state_st, reward, done, info = self.step_env(key, state, action, params)
         obs_re, state_re = self.reset_env(key_reset, params)
-        state = jax.tree_util.tree_map(
-            lambda x, y: jax.lax.select(done, x, y), state_re, state_st
-        )
+        state = jax.tree_util.tree_map(lambda x, y: jax.lax.select(done, x, y), state_re, state_st)
         obs = jax.lax.select(done, obs_re, obs_st)
         return obs, state, reward, done, info
 
