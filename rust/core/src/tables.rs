@@ -67,12 +67,13 @@
 //!
 //! # Memory
 //!
-//! [`EnvTables::bytes`]: about `94 S + 68 T + 20 S T` bytes (`next_state` `i32`, the flags
-//! one byte each, rewards `f32`). A fixed-target task (`T = 1`) costs about 120 bytes a
-//! cell: 60 kB for `paper_simple`'s 504 cells, 0.5 MB at 4,000 cells (a 50 mm regrid of
-//! it), 4 MB at 32,000 (25 mm). With random targets the target-indexed tables grow as
-//! `S T ≈ S²`: 5 MB for `paper_simple` (490 targets), about 320 MB at 4,000 cells, and
-//! about 20 GB at 32,000 cells, where the twin no longer fits.
+//! [`EnvTables::bytes`]: `94 S + 68 T + 20 S T + 460` bytes (`next_state` `i32`, the flags
+//! one byte each, rewards `f32`). A fixed-target task (`T = 1`) costs about 114 bytes a
+//! cell: 58 kB for `paper_simple`'s 504 cells, 0.38 MB for its 50 mm regrid (3,315 cells),
+//! 2.7 MB for the 25 mm one (23,925 cells). With random targets the target-indexed tables
+//! grow as `S T`: 5.0 MB for `paper_simple` (484 targets), 201 MB at 50 mm (3,020
+//! targets), and about 10 GB at 25 mm (21,200 targets): a random-target twin of that grid
+//! needs a machine larger than the 24 GB this project is developed on.
 
 use crate::env::{
     env_option_info, unreachable_cells, EnvModel, EnvOptions, OBS_COLLIDED, OBS_FLAGS, OBS_TARGET,
@@ -452,6 +453,10 @@ mod tests {
         let fixed = EnvTables::new(&s, &Options::new()).unwrap();
         assert_eq!(fixed.num_targets, 1);
         assert_eq!(fixed.target_cells, s.target.to_vec());
+        for x in [&fixed, &t] {
+            let (n, nt) = (x.num_states, x.num_targets);
+            assert_eq!(x.bytes(), 94 * n + 68 * nt + 20 * n * nt + 460);
+        }
         assert!(fixed.bytes() < 70_000, "{}", fixed.bytes());
         assert!(t.bytes() < 5_500_000, "{}", t.bytes());
     }
