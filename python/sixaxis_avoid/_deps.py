@@ -22,6 +22,8 @@ EXTRAS = {
     "stable_baselines3": "sb3",
     "jax": "jax",
     "jaxlib": "jax",
+    "gymnax": "jax-learners",
+    "rejax": "jax-learners",
 }
 
 
