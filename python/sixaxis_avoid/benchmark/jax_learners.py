@@ -24,6 +24,7 @@ values do not map onto it one to one.)
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import json
 import time
 from pathlib import Path
@@ -172,7 +173,7 @@ def run(a: argparse.Namespace) -> dict[str, Any]:
     steps_done = len(seeds) * a.total_timesteps
     return {
         "algo": a.algo,
-        "rejax_version": getattr(rejax, "__version__", "unknown"),
+        "rejax_version": importlib.metadata.version("rejax"),
         "jax_version": jax.__version__,
         "task": a.task,
         "suite": a.suite,
