@@ -19,7 +19,7 @@ def test_tiny_ppo_run_records_its_flags_speed_and_evaluations(tmp_path):
             "--seeds", "2", "--total-timesteps", "2048", "--eval-freq", "1024",
             "--num-envs", "4", "--num-steps", "16", "--num-minibatches", "2",
             "--num-epochs", "1", "--hidden", "16,16", "--max-episode-steps", "50",
-            "--out", str(out),
+            "--sb3-steps", "512", "--out", str(out),
         ]
     )  # fmt: skip
     assert json.loads(out.read_text()) == rec
@@ -35,6 +35,9 @@ def test_tiny_ppo_run_records_its_flags_speed_and_evaluations(tmp_path):
     for s_row, p_row in zip(rec["success"], rec["spl"]):
         assert all(p <= s and (p > 0) == (s > 0) for s, p in zip(s_row, p_row))
     assert rec["env_steps_per_s"] > 0 and rec["compile_s"] > 0
+    # The SB3 PPO of the same values, timed.
+    assert rec["sb3_ppo"]["env_steps"] == 512 and rec["sb3_ppo"]["env_steps_per_s"] > 0
+    assert rec["speedup_vs_sb3"] == rec["env_steps_per_s"] / rec["sb3_ppo"]["env_steps_per_s"]
 
 
 def test_missing_rejax_names_the_jax_learners_extra(monkeypatch):

@@ -63,6 +63,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--clip-eps", type=float, default=0.1)
     p.add_argument("--ent-coef", type=float, default=0.00011201827711749114)
     p.add_argument("--vf-coef", type=float, default=0.5)
+    p.add_argument(
+        "--sb3-steps",
+        type=int,
+        default=0,
+        help="also train SB3 PPO with the same values for this many env steps (one seed, one "
+        "torch thread, the native SixAxisVecEnv) and record its env steps/s",
+    )
     p.add_argument("--out", type=Path, default=None, help="JSON file (also printed)")
     return p.parse_args(argv)
 
@@ -198,9 +205,43 @@ def run(a: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+def sb3_speed(a: argparse.Namespace) -> dict[str, Any]:
+    """SB3 PPO with the same values (SB3's names), timed: env steps/s."""
+    torch = require("torch", "the SB3 comparison")
+    sb3 = require("stable_baselines3", "the SB3 comparison")
+    from sixaxis_avoid.benchmark.tasks import load_suite
+    from sixaxis_avoid.sb3 import SixAxisVecEnv
+
+    task = load_suite(a.suite).task(a.task)
+    torch.set_num_threads(1)
+    kw = {"reward_scale": a.reward_scale, "assist": bool(a.assist)}
+    if task.is_goal:
+        kw["random_target"] = True
+    venv = SixAxisVecEnv(
+        a.num_envs, seed=a.seed_offset, scenario=task.scenario,
+        max_episode_steps=a.max_episode_steps, **kw,
+    )  # fmt: skip
+    activation = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[a.activation]
+    model = sb3.PPO(
+        "MlpPolicy", venv, learning_rate=a.learning_rate, gamma=a.gamma, n_steps=a.num_steps,
+        batch_size=a.num_envs * a.num_steps // a.num_minibatches, n_epochs=a.num_epochs,
+        gae_lambda=a.gae_lambda, clip_range=a.clip_eps, ent_coef=a.ent_coef, vf_coef=a.vf_coef,
+        max_grad_norm=a.max_grad_norm, seed=a.seed_offset, device="cpu", verbose=0,
+        policy_kwargs={"net_arch": [int(h) for h in a.hidden.split(",")],
+                       "activation_fn": activation},
+    )  # fmt: skip
+    t0 = time.perf_counter()
+    model.learn(a.sb3_steps)
+    wall = time.perf_counter() - t0
+    return {"env_steps": a.sb3_steps, "wall_s": wall, "env_steps_per_s": a.sb3_steps / wall}
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     a = parse_args(argv)
     out = run(a)
+    if a.sb3_steps > 0:
+        out["sb3_ppo"] = sb3_speed(a)
+        out["speedup_vs_sb3"] = out["env_steps_per_s"] / out["sb3_ppo"]["env_steps_per_s"]
     text = json.dumps(out, indent=1)
     if a.out is not None:
         a.out.parent.mkdir(parents=True, exist_ok=True)
