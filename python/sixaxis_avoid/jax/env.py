@@ -109,6 +109,10 @@ class SixAxisAvoidJax:
     reached), ``truncated`` (the step cap ``max_steps_in_episode`` ended the episode),
     ``collided``, ``cell`` (the terminal's cell after the move, before any reset) and
     ``discount`` (0 when terminated, else 1, as gymnax's envs give it).
+
+    Actions are integers in ``0..6`` (``0:+x 1:-x 2:+y 3:-y 4:+z 5:-z``). They are not
+    checked: inside ``jax.jit`` nothing can raise, and JAX clamps an out-of-range index to
+    the nearest valid one, so check actions before they reach a jitted step.
     """
 
     def __init__(self, num_targets: int, random_target: bool):
