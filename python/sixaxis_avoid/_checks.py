@@ -1,6 +1,6 @@
 """The error of a bad Python keyword, worded like the core's, and the checks of keywords the
 core does not declare (the animation's). The envs' keywords are checked by the core's one
-table (``_core.check_options("env", ...)``, ENV_OPTIONS in rust/core/src/env.rs)."""
+table (``_core.check_options("env", ...)``, ENV_OPTIONS in rust/core/src/env/mod.rs)."""
 
 from __future__ import annotations
 

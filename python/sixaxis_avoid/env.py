@@ -54,7 +54,7 @@ def check_obs_type(obs_type: Any, goal: bool) -> str:
 
 
 def check_keywords(**keywords: Any) -> dict[str, Any]:
-    """Env keywords checked against the core's one table (ENV_OPTIONS, rust/core/src/env.rs)
+    """Env keywords checked against the core's one table (ENV_OPTIONS, rust/core/src/env/mod.rs)
     and returned as plain values: a bad value raises InvalidArgumentError naming the keyword
     and the value."""
     return _core.check_options("env", **keywords)

@@ -1,0 +1,227 @@
+//! N episodes stepped together ([`BatchEnv`]) with next-step autoreset and a step cap, into
+//! caller-provided buffers ([`BatchBuffers`]).
+
+use std::sync::Arc;
+
+use super::{EnvModel, Episode, NUM_ENVS, VECTOR_OBS_DIM};
+use crate::error::{Error, Result};
+use crate::grid::NUM_ACTIONS;
+use crate::options::{check_value, Domain, OptionValue};
+
+/// The observation buffer of a batch.
+#[derive(Debug)]
+pub enum ObsBuffer<'a> {
+    /// `n * VECTOR_OBS_DIM` floats, row-major.
+    Vector(&'a mut [f32]),
+    /// `n` state numbers.
+    Index(&'a mut [i64]),
+}
+
+/// Caller-provided output buffers of a batch step or reset (each of length `n`, `cells`
+/// of length `3 n`).
+#[derive(Debug)]
+pub struct BatchBuffers<'a> {
+    /// Observations.
+    pub obs: ObsBuffer<'a>,
+    /// Rewards.
+    pub rewards: &'a mut [f64],
+    /// The episode reached its target.
+    pub terminated: &'a mut [bool],
+    /// The episode hit the step cap.
+    pub truncated: &'a mut [bool],
+    /// The step collided.
+    pub collided: &'a mut [bool],
+    /// Distance from the terminal to the target, cells.
+    pub distance: &'a mut [f64],
+    /// The terminal's cell, row-major `(n, 3)`.
+    pub cells: &'a mut [i32],
+    /// Eq. 9's part of the step's reward (<= 0, before `reward_scale`; 0 after a reset).
+    pub detour_penalty: &'a mut [f64],
+}
+
+/// N environments stepped together, with next-step autoreset and a step cap.
+#[derive(Debug)]
+pub struct BatchEnv {
+    model: Arc<EnvModel>,
+    episodes: Vec<Episode>,
+    needs_reset: Vec<bool>,
+    max_episode_steps: u32,
+}
+
+impl BatchEnv {
+    /// `n` environments of `model`, truncated after `max_episode_steps` steps.
+    pub fn new(model: Arc<EnvModel>, n: usize, max_episode_steps: u32) -> Result<BatchEnv> {
+        check_value("num_envs", &NUM_ENVS, &OptionValue::Int(n as i128))?;
+        check_value(
+            "max_episode_steps",
+            &Domain::u32_from(1),
+            &OptionValue::Int(max_episode_steps as i128),
+        )?;
+        let ep = Episode::new(&model);
+        Ok(BatchEnv {
+            episodes: vec![ep; n],
+            needs_reset: vec![true; n],
+            model,
+            max_episode_steps,
+        })
+    }
+
+    /// Number of environments.
+    pub fn len(&self) -> usize {
+        self.episodes.len()
+    }
+
+    /// Always false (a batch has at least one env).
+    pub fn is_empty(&self) -> bool {
+        self.episodes.is_empty()
+    }
+
+    /// The shared model.
+    pub fn model(&self) -> &Arc<EnvModel> {
+        &self.model
+    }
+
+    /// The episodes.
+    pub fn episodes(&self) -> &[Episode] {
+        &self.episodes
+    }
+
+    /// The step cap.
+    pub fn max_episode_steps(&self) -> u32 {
+        self.max_episode_steps
+    }
+
+    /// Seed env `i`'s generator (random targets).
+    pub fn seed(&mut self, seeds: &[u64]) -> Result<()> {
+        if seeds.len() != self.len() {
+            return Err(Error::argument(
+                "seeds",
+                format!("{} seeds", seeds.len()),
+                format!("expected one per env ({})", self.len()),
+            ));
+        }
+        for (ep, &s) in self.episodes.iter_mut().zip(seeds) {
+            ep.seed(s);
+        }
+        Ok(())
+    }
+
+    fn check(&self, buf: &BatchBuffers<'_>) -> Result<()> {
+        let n = self.len();
+        let obs_ok = match &buf.obs {
+            ObsBuffer::Vector(o) => o.len() == n * VECTOR_OBS_DIM,
+            ObsBuffer::Index(o) => o.len() == n,
+        };
+        let ok = obs_ok
+            && buf.rewards.len() == n
+            && buf.terminated.len() == n
+            && buf.truncated.len() == n
+            && buf.collided.len() == n
+            && buf.distance.len() == n
+            && buf.detour_penalty.len() == n
+            && buf.cells.len() == 3 * n;
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::argument(
+                "buffers",
+                "lengths",
+                format!("every buffer must hold {n} envs"),
+            ))
+        }
+    }
+
+    #[inline]
+    fn write(&self, i: usize, buf: &mut BatchBuffers<'_>) {
+        let ep = &self.episodes[i];
+        let m = &*self.model;
+        match &mut buf.obs {
+            ObsBuffer::Vector(o) => {
+                ep.write_vector_obs(m, &mut o[i * VECTOR_OBS_DIM..(i + 1) * VECTOR_OBS_DIM])
+            }
+            ObsBuffer::Index(o) => o[i] = ep.state as i64,
+        }
+        buf.distance[i] = ep.distance_to_target(m);
+        let c = m.world.cell_of(ep.state as usize);
+        buf.cells[3 * i..3 * i + 3].copy_from_slice(&c);
+        buf.collided[i] = ep.collided;
+    }
+
+    fn reset_one(&mut self, i: usize, buf: &mut BatchBuffers<'_>) {
+        self.episodes[i].reset(&self.model);
+        self.needs_reset[i] = false;
+        buf.rewards[i] = 0.0;
+        buf.terminated[i] = false;
+        buf.truncated[i] = false;
+        buf.detour_penalty[i] = 0.0;
+        self.write(i, buf);
+    }
+
+    /// Reset the envs where `mask` is true (all if `None`) and write their observations.
+    /// Entries of other envs are left as they were.
+    pub fn reset(&mut self, mask: Option<&[bool]>, mut buf: BatchBuffers<'_>) -> Result<()> {
+        self.check(&buf)?;
+        if let Some(m) = mask {
+            if m.len() != self.len() {
+                return Err(Error::argument(
+                    "reset_mask",
+                    format!("{} entries", m.len()),
+                    format!("expected one per env ({})", self.len()),
+                ));
+            }
+        }
+        for i in 0..self.len() {
+            if mask.is_none_or(|m| m[i]) {
+                self.reset_one(i, &mut buf);
+            }
+        }
+        Ok(())
+    }
+
+    /// Step every env with its action (each < 6, all checked before any env moves). Envs
+    /// whose episode ended at the previous step are reset instead (next-step autoreset).
+    pub fn step<A>(&mut self, actions: &[A], mut buf: BatchBuffers<'_>) -> Result<()>
+    where
+        A: Copy + TryInto<usize> + std::fmt::Display,
+    {
+        self.check(&buf)?;
+        let n = self.len();
+        if actions.len() != n {
+            return Err(Error::argument(
+                "actions",
+                format!("{} actions", actions.len()),
+                format!("expected one per env ({n})"),
+            ));
+        }
+        for (i, &a) in actions.iter().enumerate() {
+            match a.try_into() {
+                Ok(v) if v < NUM_ACTIONS => {}
+                _ => {
+                    return Err(Error::argument(
+                        "actions",
+                        format!("{a} at index {i}"),
+                        "each action must be an integer in 0..6",
+                    ))
+                }
+            }
+        }
+        let model = Arc::clone(&self.model);
+        for (i, &action) in actions.iter().enumerate() {
+            if self.needs_reset[i] {
+                self.reset_one(i, &mut buf);
+                continue;
+            }
+            let a = action.try_into().unwrap_or(0);
+            let ep = &mut self.episodes[i];
+            let out = ep.step(&model, a);
+            let truncated = !out.reached && ep.steps >= self.max_episode_steps;
+            buf.rewards[i] = out.reward;
+            buf.terminated[i] = out.reached;
+            buf.truncated[i] = truncated;
+            buf.detour_penalty[i] = out.detour_penalty;
+            self.needs_reset[i] = out.reached || truncated;
+            self.write(i, &mut buf);
+        }
+        Ok(())
+    }
+}
