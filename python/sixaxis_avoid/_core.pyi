@@ -34,6 +34,7 @@ __all__ = [
     "centres_clearance_cells",
     "check_options",
     "clear_pose_at",
+    "env_tables",
     "expand_names",
     "export_scenario",
     "generate_scenario",
@@ -440,6 +441,15 @@ def export_scenario(
     format: str = "mjcf",
     path: str | PathLike[str] | None = None,
 ) -> str: ...
+def env_tables(
+    scenario: _ScenarioLike = None,
+    *,
+    assist: bool | None = None,
+    reward_scale: float | None = None,
+    random_target: bool | None = None,
+    arm_aware: bool | None = None,
+    max_episode_steps: int | None = None,
+) -> dict[str, npt.NDArray[Any]]: ...
 def generate_scenario(
     seed: int,
     *,

@@ -20,6 +20,10 @@ EXTRAS = {
     "mujoco": "mujoco",
     "yourdfpy": "urdf",
     "stable_baselines3": "sb3",
+    "jax": "jax",
+    "jaxlib": "jax",
+    "gymnax": "jax-learners",
+    "rejax": "jax-learners",
 }
 
 

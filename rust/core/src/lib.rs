@@ -59,6 +59,7 @@ pub mod regrid;
 pub mod replanning;
 pub mod request;
 pub mod scenario;
+pub mod tables;
 
 pub use clearance::Clearance;
 pub use error::{Error, Result};
