@@ -398,3 +398,18 @@ def test_cli_list_and_errors(capsys):
     for bad, says in (("0", "seed 0 alone is --seeds 0,"), ("two", "'two'"), ("1,-2", "'1,-2'")):
         with pytest.raises(SystemExit, match=says):
             cli.parse_seeds(bad)
+
+
+def test_regenerated_report_keeps_sections_other_scripts_own(tmp_path):
+    from sixaxis_avoid.benchmark.report import keep_other_sections
+
+    out = tmp_path / "B.md"
+    out.write_text(
+        "old\n<!-- benchmark-aggregate:begin -->\nold table\n<!-- benchmark-aggregate:end -->\n"
+        "<!-- jax-twin:begin -->\n## JAX twin\nkept\n<!-- jax-twin:end -->\n"
+    )
+    new = "new\n<!-- benchmark-aggregate:begin -->\nnew table\n<!-- benchmark-aggregate:end -->\n"
+    text = keep_other_sections(out, new)
+    assert "new table" in text and "old table" not in text
+    assert text.endswith("<!-- jax-twin:begin -->\n## JAX twin\nkept\n<!-- jax-twin:end -->\n")
+    assert keep_other_sections(tmp_path / "missing.md", new) == new

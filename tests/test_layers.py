@@ -30,6 +30,11 @@ LAYERS = [
     "sixaxis_avoid.verify",
     "sixaxis_avoid.animate",
     "sixaxis_avoid",
+    # The JAX twin: the env from the core's tables, then what builds on it.
+    "sixaxis_avoid.jax.env",
+    "sixaxis_avoid.jax",
+    "sixaxis_avoid.jax.gymnax_compat",
+    "sixaxis_avoid.jax.bench",
     # The benchmark: tools first, then tasks and learners, the runner, the reports, and
     # the command line on top.
     "sixaxis_avoid.benchmark._io",
@@ -43,6 +48,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.longer",
     "sixaxis_avoid.benchmark.report",
     "sixaxis_avoid.benchmark.tune",
+    "sixaxis_avoid.benchmark.jax_learners",
     "sixaxis_avoid.benchmark",
     "sixaxis_avoid.benchmark.__main__",
 ]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from collections import Counter
 from pathlib import Path
 from typing import Any
@@ -622,6 +623,19 @@ def longer_figures(longer: list[dict[str, Any]], figures_dir: Path) -> dict[str,
     return figs
 
 
+_SECTION = re.compile(r"<!-- ([\w.-]+):begin -->\n.*?<!-- \1:end -->", re.S)
+
+
+def keep_other_sections(out: Path, text: str) -> str:
+    """``text`` with the marked sections of the old ``out`` that other scripts own (markers
+    as in scripts/docsections.py, e.g. ``jax-twin``) appended, so a regeneration keeps them."""
+    if not out.exists():
+        return text
+    mine = {m.group(1) for m in _SECTION.finditer(text)}
+    kept = [m.group(0) for m in _SECTION.finditer(out.read_text()) if m.group(1) not in mine]
+    return text.rstrip("\n") + "".join(f"\n\n{k}" for k in kept) + "\n"
+
+
 def write_report(
     results: Path,
     out: Path,
@@ -640,7 +654,7 @@ def write_report(
     dirs = [longer] if isinstance(longer, (str, Path)) else list(longer or [])
     a["longer"] = [analyse_longer(a, Path(d), reps) for d in dirs]
     figs.update(longer_figures(a["longer"], figures_dir))
-    atomic_write_text(out, markdown(a, figs, out, a["longer"]))
+    atomic_write_text(out, keep_other_sections(out, markdown(a, figs, out, a["longer"])))
     summary = {
         "learners": a["learners"],
         "tasks": a["tasks"],

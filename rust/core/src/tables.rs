@@ -186,31 +186,30 @@ pub fn env_options_of(scenario: &Scenario, options: &Options) -> Result<(EnvOpti
         let info = env_option_info(key).expect("TABLE_KEYS are keys of ENV_OPTIONS");
         check_value(key, &info.domain, value)?;
     }
-    let flag = |key: &str| matches!(options.get(key), Some(OptionValue::Bool(true)));
-    let mut req = TrainRequest::default();
-    if let Some(OptionValue::Bool(a)) = options.get("assist") {
-        req = req.with("assist", *a);
-    }
-    let reward_scale = match options.get("reward_scale") {
-        Some(OptionValue::Float(x)) => *x,
-        Some(OptionValue::Int(i)) => *i as f64,
-        _ => 1.0,
+    let mut opts = EnvOptions::for_scenario(scenario);
+    let flag = |key: &str, default: bool| match options.get(key) {
+        Some(OptionValue::Bool(b)) => *b,
+        _ => default,
     };
+    if let Some(OptionValue::Bool(a)) = options.get("assist") {
+        opts.assist = TrainRequest::default()
+            .with("assist", *a)
+            .resolve(scenario)?
+            .assist();
+    }
+    match options.get("reward_scale") {
+        Some(OptionValue::Float(x)) => opts.reward_scale = *x,
+        Some(OptionValue::Int(i)) => opts.reward_scale = *i as f64,
+        _ => {}
+    }
+    opts.random_target = flag("random_target", opts.random_target);
     let max_episode_steps = match options.get("max_episode_steps") {
         Some(OptionValue::Int(i)) => *i as u32,
         _ => scenario.learning.max_steps_per_episode,
     };
-    let extra_obstacles = if flag("arm_aware") {
-        unreachable_cells(scenario)?
-    } else {
-        Vec::new()
-    };
-    let opts = EnvOptions {
-        assist: req.resolve(scenario)?.assist(),
-        reward_scale,
-        random_target: flag("random_target"),
-        extra_obstacles,
-    };
+    if flag("arm_aware", false) {
+        opts.extra_obstacles = unreachable_cells(scenario)?;
+    }
     Ok((opts, max_episode_steps))
 }
 

@@ -36,8 +36,8 @@ pub fn env_tables<'py>(
     let s = scenario_from_any(py, scenario)?;
     let infos: Vec<OptionInfo> = ENV_OPTIONS
         .iter()
-        .filter(|i| TABLE_KEYS.contains(&i.key))
-        .copied()
+        .filter(|o| TABLE_KEYS.contains(&o.key))
+        .map(|o| o.info)
         .collect();
     let opts = options_of(py, "env_tables", &infos, env_options)?;
     let t = run(py, move || EnvTables::new(&s, &opts))?;

@@ -5,8 +5,17 @@
 //! Entry points: [`distance_bound_table`], [`distance_bound_values`].
 
 use super::table::{QTable, QValue, Rows};
-use crate::grid::{GridWorld, NUM_ACTIONS};
-use crate::scenario::{Learning, QPrecision};
+use crate::grid::{base_reward_of, GridWorld, NUM_ACTIONS};
+use crate::scenario::{Assist, Learning, QPrecision};
+
+/// Eqs. 5 and 10 (no eq. 9: the bound counts no collision) as the learner's options select
+/// them: the one reward function of the grid ([`base_reward_of`]).
+fn assist_of(opts: &Learning) -> Assist {
+    Assist {
+        detour: false,
+        distance: opts.assist_distance,
+    }
+}
 
 /// The `"distance"` initial Q-table (`learning.initial_q`, ours; see the module docs):
 /// `Q0(s, a) = R1(s, a) + gamma * V0(next(s, a))`, where `R1` is the first step's reward
@@ -24,12 +33,7 @@ pub fn distance_bound_table(world: &GridWorld, opts: &Learning) -> QTable {
 
 fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &Learning) -> Vec<[V; NUM_ACTIONS]> {
     let v0 = distance_bound_values(world, opts);
-    let rw = world.rewards();
-    let r_e = if opts.assist_distance {
-        rw.distance_reward
-    } else {
-        0.0
-    };
+    let (rw, assist) = (world.rewards(), assist_of(opts));
     let d_o = world.start_distance_cells();
     let target = world.target();
     world
@@ -42,11 +46,18 @@ fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &Learning) -> Vec<[V;
             }
             next.map(|n| {
                 let n = n as usize;
-                let eq10 = r_e * (d_o - world.distance_to_target_cells(n));
+                let first = base_reward_of(
+                    rw,
+                    false,
+                    n == target,
+                    d_o,
+                    world.distance_to_target_cells(n),
+                    assist,
+                );
                 V::from_f64(if n == target {
-                    rw.target_reward + eq10
+                    first
                 } else {
-                    -rw.step_penalty + eq10 + opts.gamma * v0[n]
+                    first + opts.gamma * v0[n]
                 })
             })
         })
@@ -61,13 +72,7 @@ fn distance_bound_rows<V: QValue>(world: &GridWorld, opts: &Learning) -> Vec<[V;
 /// While every step's reward is negative (`r_e d_o < p`), a longer path only lowers this
 /// sum, so the bound holds for paths of every length. Exact on a straight free path.
 pub fn distance_bound_values(world: &GridWorld, opts: &Learning) -> Vec<f64> {
-    let rw = world.rewards();
-    let (p, r, gamma) = (rw.step_penalty, rw.target_reward, opts.gamma);
-    let r_e = if opts.assist_distance {
-        rw.distance_reward
-    } else {
-        0.0
-    };
+    let (rw, assist, gamma) = (world.rewards(), assist_of(opts), opts.gamma);
     let d_o = world.start_distance_cells();
     let tc = world.cell_of(world.target());
     let inv_sqrt3 = 1.0 / 3f64.sqrt();
@@ -83,10 +88,10 @@ pub fn distance_bound_values(world: &GridWorld, opts: &Learning) -> Vec<f64> {
             let mut disc = 1.0;
             for j in 1..k {
                 let l = (d_n - j as f64).max((k - j) as f64 * inv_sqrt3).max(0.0);
-                sum += disc * (-p + r_e * (d_o - l));
+                sum += disc * base_reward_of(rw, false, false, d_o, l, assist);
                 disc *= gamma;
             }
-            sum + disc * (r + r_e * d_o)
+            sum + disc * base_reward_of(rw, false, true, d_o, 0.0, assist)
         })
         .collect()
 }
