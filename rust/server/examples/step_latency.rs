@@ -1,5 +1,5 @@
 //! A tiny tonic client of the env server: single-env Step round trips (p50 / p99) and the
-//! env steps per second of one batched world (docs/SERVER.md, "What a step costs").
+//! env steps per second of one batched world (docs/SERVER.md "What a step costs").
 //!
 //! ```sh
 //! cargo run --release -p sixaxis-server --example step_latency              # in-process server

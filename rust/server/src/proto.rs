@@ -1,5 +1,5 @@
 //! The dm_env_rpc v1 messages, written here as prost structs from the protocol's wire format
-//! (package `dm_env_rpc.v1`; docs/SERVER.md, "The protocol"): every message name and field
+//! (package `dm_env_rpc.v1`; docs/SERVER.md "The protocol"): every message name and field
 //! number is the protocol's, so any dm_env_rpc client reads and writes them.
 //!
 //! Maps (`map<K, V>` in the protocol) are repeated key/value entry messages on the wire,

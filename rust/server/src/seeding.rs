@@ -5,7 +5,7 @@
 //! `gymnasium.utils.seeding.np_random(seed + i)[0].integers(0, 2**63)`: NumPy's
 //! `SeedSequence(seed + i)` feeds a `PCG64` bit generator and `integers(0, 2**63)` draws one
 //! int64. This module is that arithmetic, from NumPy's documented algorithms
-//! (docs/SERVER.md, "Seeds"):
+//! (docs/SERVER.md "Seeds"):
 //! - `SeedSequence`: the entropy (the seed's 32-bit words, least significant first) is
 //!   hashed into a pool of four 32-bit words, and `generate_state` hashes the pool into the
 //!   words asked for;

@@ -5,7 +5,7 @@
 //!   `EnvironmentResponse.error` and the stream goes on; only a request that cannot be
 //!   decoded, an idle stream or the server's shutdown end it.
 //! - The worlds a session created are destroyed when it ends, however it ends (the client
-//!   closed the stream, vanished, or idled out): [`Session`]'s `Drop`.
+//!   closed the stream, vanished, or idled out): `Session`'s `Drop`.
 //! - Steps of worlds of at least [`BLOCKING_LANES`] lanes run on tokio's blocking pool, off
 //!   the reactor; smaller ones inline (a thread hop costs more than their step).
 //! - A panic in a request is caught and answered with INTERNAL; the server goes on.
@@ -32,7 +32,7 @@ use crate::world::{gone, reset_seed, World, WorldSettings};
 /// Worlds of at least this many lanes are stepped on the blocking pool.
 pub const BLOCKING_LANES: usize = 256;
 
-/// The server's limits (docs/SERVER.md, "Limits").
+/// The server's limits (docs/SERVER.md "Limits").
 #[derive(Debug, Clone, PartialEq)]
 pub struct Limits {
     /// Concurrent `Process` streams.

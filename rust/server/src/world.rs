@@ -1,5 +1,5 @@
 //! A world: one native batch of `num_envs` lanes ([`BatchEnv`]) with the specs, settings and
-//! step semantics of docs/SERVER.md ("Worlds", "Episodes").
+//! step semantics of docs/SERVER.md "CreateWorld settings" and docs/SERVER.md "Episodes".
 //!
 //! - The first Step after JoinWorld, Reset or ResetWorld resets every lane (seeding them
 //!   first if a seed is pending) and returns the initial observations; its actions are

@@ -1,4 +1,4 @@
-//! Fuzzing the request decoding (docs/SERVER.md, "Reliability"): random bytes and mutated
+//! Fuzzing the request decoding (docs/SERVER.md "Reliability"): random bytes and mutated
 //! valid `EnvironmentRequest`s are decoded and, when they decode, handled by a world as the
 //! server would (settings checked, Step, Reset); nothing may panic. The counts are printed
 //! (`cargo test -p sixaxis-server --release --test fuzz_decode -- --nocapture`);
