@@ -7,7 +7,7 @@ bash scripts/setup.sh
 source .venv/bin/activate
 echo "== cargo fmt";    cargo fmt --all -- --check
 echo "== cargo clippy"; cargo clippy --workspace --all-targets --quiet -- -D warnings
-echo "== cargo doc";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet -p sixaxis-core -p sixaxis-cli
+echo "== cargo doc";    RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet -p sixaxis-core -p sixaxis-cli -p sixaxis-server
 echo "== ruff";         ruff check python tests scripts && ruff format --check python tests scripts
 # The hand-written stub python/sixaxis_avoid/_core.pyi against the built extension.
 echo "== stubtest";     python -m mypy.stubtest sixaxis_avoid._core

@@ -16,6 +16,7 @@ mod planner;
 mod request;
 mod scenario;
 mod tables;
+mod serve;
 mod train;
 mod util;
 
@@ -76,6 +77,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(util::expand_names, m)?)?;
     m.add_function(wrap_pyfunction!(export::export_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(tables::env_tables, m)?)?;
+    m.add_class::<serve::PyServer>()?;
+    m.add_function(wrap_pyfunction!(serve::serve, m)?)?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     let (t, g) = (
         sixaxis_core::env::OBS_TERMINAL,
