@@ -531,9 +531,7 @@ class RemoteEnv(gym.Env):
         s.send(self._world.step_request(None), "Step")
         s.receive()
         d = self._world.decode(s.receive())
-        info = self._info(d)
-        info.pop("is_success", None)
-        return self._obs(d), info
+        return self._obs(d), self._info(d)
 
     def step(self, action):
         a = np.asarray(action)
@@ -749,16 +747,16 @@ class RemoteVectorEnv(VectorEnv):
         sent = []
         for w, s in zip(self._worlds, seeds):
             if mask is None or mask[w.lanes].all():
-                settings = _seed_settings(s)
+                w.session.send(dm_env_rpc_pb2.ResetRequest(settings=_seed_settings(s)), "Reset")
             elif not mask[w.lanes].any():
                 continue
             else:
-                settings = {"reset_mask": tensor_utils.pack_tensor(mask[w.lanes])}
-            w.session.send(dm_env_rpc_pb2.ResetRequest(settings=settings), "Reset")
+                self._reset_lanes(w, mask[w.lanes])
             w.session.send(w.step_request(None), "Step")
             sent.append(w)
         for w in sent:
-            w.session.receive()
+            if mask is None or mask[w.lanes].all():
+                w.session.receive()
         decoded = [(w, w.decode(w.session.receive())) for w in sent]
         for w, d in decoded:
             self._store(w, d, mask)
@@ -771,6 +769,21 @@ class RemoteVectorEnv(VectorEnv):
             self._success[rows] = False
             self._ended[rows] = False
         return self._observations(), self._info()
+
+    @staticmethod
+    def _reset_lanes(w: _World, lanes: np.ndarray) -> None:
+        """Reset some lanes of a multi-lane world (a Reset with ``reset_mask``, for a server
+        that takes it)."""
+        settings = {"reset_mask": tensor_utils.pack_tensor(lanes)}
+        try:
+            w.session.call(dm_env_rpc_pb2.ResetRequest(settings=settings), "Reset")
+        except _core.InvalidArgumentError as e:
+            raise invalid(
+                "options['reset_mask']",
+                lanes.tolist(),
+                f"the server at {w.session.address} resets every lane of a world ({e}); "
+                "make the env with lanes_per_world=1 to reset single lanes",
+            ) from None
 
     def actions_array(self, actions) -> np.ndarray:
         """``actions`` as the int32 array of shape ``(num_envs,)`` sent to the servers."""
@@ -908,14 +921,17 @@ def _remote_sb3_vec_env() -> type:
         with a :class:`RemoteVectorEnv` in place of the native vector env.
 
         ``RemoteSB3VecEnv(addresses, n_envs, seed=None, token=None, **env_kwargs)``; the
-        keywords are :class:`RemoteVectorEnv`'s. Finished lanes are reset with a Reset
-        carrying their ``reset_mask`` (docs/SERVER.md "Episodes").
+        keywords are :class:`RemoteVectorEnv`'s; ``lanes_per_world`` defaults to 1 here, as
+        SB3 resets each lane when its episode ends and a server resets whole worlds
+        (docs/SERVER.md "Episodes"); all the worlds are stepped at once.
         """
 
         def __init__(
             self, address_or_addresses: Any, n_envs: int, seed: int | None = None, **kwargs: Any
         ):
             self.env_id = "remote"
+            # SB3 resets a lane as soon as its episode ends: one world per lane.
+            kwargs.setdefault("lanes_per_world", 1)
             self.venv = RemoteVectorEnv(address_or_addresses, n_envs, copy=False, **kwargs)
             v = self.venv
             self.render_mode = None
