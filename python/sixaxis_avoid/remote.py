@@ -1024,6 +1024,11 @@ class _ServerHolder:
     def address(self) -> str:
         return self.server.address
 
+    def node_id(self) -> str:
+        import ray
+
+        return ray.get_runtime_context().get_node_id()
+
     def stop(self) -> None:
         self.server.stop()
 
