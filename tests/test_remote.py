@@ -4,7 +4,8 @@ dropped server, closing, SB3, and a short load test (scripts/load_test.py)."""
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
+import sys
 import threading
 import time
 from concurrent import futures
@@ -22,10 +23,12 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def _load_test_module():
-    spec = importlib.util.spec_from_file_location("load_test", ROOT / "scripts" / "load_test.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    """scripts/load_test.py, importable by name (its client processes are spawned and
+    import it again; spawn passes sys.path on)."""
+    scripts = str(ROOT / "scripts")
+    if scripts not in sys.path:
+        sys.path.insert(0, scripts)
+    return importlib.import_module("load_test")
 
 
 @pytest.fixture(scope="module")

@@ -170,6 +170,7 @@ class _Session:
         self.timeout = timeout
         self._deadline: float | None = None
         self._expired = False
+        self._down = False
         self._failure: BaseException | None = None
         self._pending: deque[tuple[str, str]] = deque()
         self.world_name: str | None = None
@@ -309,6 +310,9 @@ class _Session:
         self._shutdown()
 
     def _shutdown(self) -> None:
+        if self._down:
+            return
+        self._down = True
         _sessions.discard(self)
         self._requests.put(None)
         self._call.cancel()
@@ -577,9 +581,9 @@ class RemoteEnv(gym.Env):
         )
 
     def close(self) -> None:
+        """Leave and destroy the world; every later call raises ``ConnectionError``."""
         if getattr(self, "_session", None) is not None:
             self._session.close()
-            self._session = None
 
     def __del__(self):
         try:
@@ -906,6 +910,12 @@ class RemoteVectorEnv(VectorEnv):
         info["is_success"] = self._success.copy()
         info["_is_success"] = m
         return info
+
+    def __enter__(self) -> RemoteVectorEnv:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
 
     def _check_open(self) -> None:
         if self._closed:
