@@ -25,6 +25,7 @@ __all__ = [
     "ScenarioNotFoundError",
     "ScenarioParseError",
     "SixAxisError",
+    "Server",
     "SixAxisIOError",
     "TrainResult",
     "VecEnvCore",
@@ -43,6 +44,7 @@ __all__ = [
     "machine",
     "options",
     "plan",
+    "serve",
     "shortest_path",
     "train",
     "unreachable_cells",
@@ -455,3 +457,35 @@ def generate_scenario(
 def write_atomic(path: str | PathLike[str], data: bytes | str) -> None: ...
 def machine() -> str: ...
 def expand_names(names: str) -> list[str]: ...
+
+# The env server (dm_env_rpc v1 over gRPC; docs/SERVER.md).
+@final
+class Server:
+    @property
+    def address(self) -> str: ...
+    @property
+    def port(self) -> int | None: ...
+    @property
+    def running(self) -> bool: ...
+    @property
+    def worlds(self) -> int: ...
+    @property
+    def sessions(self) -> int: ...
+    def stop(self) -> None: ...
+    def __enter__(self) -> Self: ...
+    def __exit__(self, *_args: object) -> bool: ...
+
+def serve(
+    address: str = "127.0.0.1:0",
+    *,
+    uds: str | PathLike[str] | None = None,
+    token: str | None = None,
+    tls_cert: str | PathLike[str] | None = None,
+    tls_key: str | PathLike[str] | None = None,
+    max_sessions: int | None = None,
+    max_worlds_per_session: int | None = None,
+    max_envs_per_world: int | None = None,
+    max_total_envs: int | None = None,
+    max_message_bytes: int | None = None,
+    idle_timeout: float | None = None,
+) -> Server: ...

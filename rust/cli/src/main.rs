@@ -19,6 +19,7 @@ mod learn;
 mod list;
 mod progress;
 mod reproduce;
+mod serve;
 
 /// Six-axis arm path planning with Q-learning and whole-arm obstacle avoidance.
 #[derive(Parser, Debug)]
@@ -162,6 +163,16 @@ enum Command {
         args: reproduce::ReproduceArgs,
         #[command(flatten)]
         out: OutArgs,
+    },
+    /// Serve the env over dm_env_rpc v1 (gRPC): worlds of the Gymnasium env for clients in
+    /// other processes, machines or languages (docs/SERVER.md).
+    ///
+    /// Prints {"address": ..., "port": ...} on stdout once it listens; SIGTERM drains it.
+    ///
+    /// Example: sixaxis serve --address 127.0.0.1:50051
+    Serve {
+        #[command(flatten)]
+        args: serve::ServeArgs,
     },
 }
 
@@ -323,6 +334,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let s = Scenario::load(&scenario)?;
             emit_text(&sixaxis_core::export::export(&s, format), &out)
         }
+        Command::Serve { args } => Ok(serve::run(&args)?),
         Command::Generate { seed, options, out } => {
             let opts =
                 sixaxis_core::generator::GeneratorOptions::default().with(&options.options()?)?;
@@ -337,7 +349,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    interrupt::install();
+    // The server drains on SIGINT/SIGTERM itself (serve::run).
+    if !matches!(cli.command, Command::Serve { .. }) {
+        interrupt::install();
+    }
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(e)) => {

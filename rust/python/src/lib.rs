@@ -15,6 +15,7 @@ mod plan;
 mod planner;
 mod request;
 mod scenario;
+mod serve;
 mod train;
 mod util;
 
@@ -74,6 +75,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(util::machine, m)?)?;
     m.add_function(wrap_pyfunction!(util::expand_names, m)?)?;
     m.add_function(wrap_pyfunction!(export::export_scenario, m)?)?;
+    m.add_class::<serve::PyServer>()?;
+    m.add_function(wrap_pyfunction!(serve::serve, m)?)?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     let (t, g) = (
         sixaxis_core::env::OBS_TERMINAL,
