@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-BINARY = ROOT / "target" / "release" / "sixaxis"
+#: The release binary (SIXAXIS_BIN overrides, as in tests/conftest.py).
+BINARY = Path(os.environ.get("SIXAXIS_BIN", ROOT / "target" / "release" / "sixaxis"))
 #: Episode cap of the clients' worlds: short, so every client crosses many resets.
 EPISODE_STEPS = 40
 
