@@ -62,8 +62,8 @@ try:
     )
 except ImportError as e:  # pragma: no cover - exercised only without the packages
     raise DependencyNotInstalled(
-        "sixaxis_avoid.remote needs dm-env-rpc and grpcio, which are not installed: "
-        "pip install dm-env-rpc grpcio"
+        "sixaxis_avoid.remote needs dm-env-rpc (and its grpcio), which is not installed: "
+        'pip install "sixaxis-avoid[server]"'
     ) from e
 
 __all__ = [
