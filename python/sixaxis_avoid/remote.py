@@ -74,7 +74,7 @@ __all__ = [
     "start_ray_servers",
 ]
 
-#: Observation names of the protocol (docs/SERVER.md "Specs"); uids are read from the specs.
+#: Observation names of the protocol (docs/SERVER.md "Uids and specs"); uids are read from the specs.
 _OBSERVATION = "observation"
 _GOALS = ("achieved_goal", "desired_goal")
 _STEP_NAMES = ("reward", "terminated", "truncated", "is_success")
@@ -443,7 +443,7 @@ class _World:
                 flat = packer.unpack(tensor)
             else:
                 # np.array reads the repeated field as a buffer, ~300x np.fromiter (which
-                # packer.unpack uses) on upb protobuf at N = 4096 (docs/PERFORMANCE.md).
+                # packer.unpack uses) on upb protobuf at N = 4096 (docs/PERFORMANCE.md "Server").
                 flat = np.array(getattr(tensor, packer.name).array, packer.np_type)
             try:
                 out[name] = flat.reshape(shape)
