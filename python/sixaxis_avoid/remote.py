@@ -74,7 +74,7 @@ __all__ = [
     "start_ray_servers",
 ]
 
-#: Observation names of the protocol (docs/SERVER.md "Uids and specs"); uids are read from the specs.
+#: Observation names of the protocol (docs/SERVER.md "Uids and specs"); uids come from the specs.
 _OBSERVATION = "observation"
 _GOALS = ("achieved_goal", "desired_goal")
 _STEP_NAMES = ("reward", "terminated", "truncated", "is_success")
