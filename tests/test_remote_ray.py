@@ -111,6 +111,12 @@ def test_one_server_per_node_driven_by_one_vector_env(two_node_cluster):
         assert len(servers) == 2 and all(isinstance(a, str) for a in servers)
         assert sorted(servers.node_ids) == sorted(n["NodeID"] for n in nodes)
         assert len(set(servers)) == 2  # two servers, two ports
+        # Each binds its node's address; off loopback only with a (generated) token.
+        ips = {n["NodeID"]: n["NodeManagerAddress"] for n in nodes}
+        for address, node in zip(servers, servers.node_ids):
+            assert address.rsplit(":", 1)[0] == ips[node]
+        if any(not ip.startswith("127.") for ip in ips.values()):
+            assert servers.token is not None and len(servers.token) >= 32
         # Each actor runs on the node it was pinned to.
         where = ray.get([a.node_id.remote() for a in servers.actors])
         assert where == servers.node_ids
