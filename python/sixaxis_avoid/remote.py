@@ -269,7 +269,7 @@ class _Session:
             )
         name = code.name if code is not None else "error"
         return ConnectionError(
-            f"the env server at {self.address} dropped the session during {what} "
+            f"the env server at {self.address} ended the session during {what} "
             f"({name}: {details}); the world is gone: make a new env"
         )
 
