@@ -58,6 +58,12 @@ def parse_args() -> argparse.Namespace:
     )
     p.add_argument("--server-out", type=Path, default=ROOT / "results" / "bench" / "server.json")
     p.add_argument(
+        "--load-json",
+        type=Path,
+        default=ROOT / "results" / "bench" / "load_test.json",
+        help="JSON of scripts/load_test.py --json, shown in the `server` section when present",
+    )
+    p.add_argument(
         "--server-render-only", action="store_true", help="rewrite `server` from --server-out"
     )
     return p.parse_args()
@@ -509,7 +515,11 @@ def server_section(data: dict) -> str:
     lines += [
         "",
         f"Goal: p50 ≤ 100 µs and ≤ 3x the raw-TCP floor: {p50:.0f} µs, "
-        f"{p50 / floor:.1f}x — {'met' if p50 <= 100 and p50 <= 3 * floor else 'not met'}.",
+        f"{p50 / floor:.1f}x — {'met' if p50 <= 100 and p50 <= 3 * floor else 'not met'}."
+        " The round trip is grpcio's Python stream: dm_env_rpc's own `Connection` pays about the"
+        " same, and `RemoteEnv` adds its tensor packing and Gymnasium conversions. Meeting the"
+        " goal needs a client outside Python's gRPC (e.g. a Rust client in the extension module"
+        " with the GIL released); the server side is not the limit.",
         "",
         "Batched world, one client (`RemoteVectorEnv(address, N)`: one Step carries N lanes)"
         " against the native vector env at the same N:",
@@ -546,10 +556,30 @@ def server_section(data: dict) -> str:
     rss = s["server_rss_kib"]
     lines += [
         "",
+        "The client reads observation tensors with `np.array` over the protobuf repeated field;"
+        " `dm_env_rpc`'s packers use `np.fromiter`, which took 4 ms for the 4096 x 13 floats of"
+        " one N = 4096 observation against 13 µs (upb protobuf), and capped the batched world"
+        " at about 200 k env steps/s.",
+        "",
         f"Server resident memory before / after the client runs: {rss['before_clients'] / 1024:.1f}"
         f" / {rss['after_clients'] / 1024:.1f} MiB.",
         "",
     ]
+    load = data.get("load_test")
+    if load:
+        lines += [
+            f"Load test (`python scripts/load_test.py --clients {load['clients']} --steps"
+            f" {load['steps_per_client']}`, run separately): {load['clients']} concurrent"
+            f" sessions, {load['steps_checked']:,} steps and {load['episodes']:,} episodes each"
+            " checked step for step against the in-process env:"
+            f" {len(load['errors'])} differences or errors, server alive; server resident memory"
+            f" {load['rss_kib_after_warmup'] / 1024:.1f} MiB after a warm-up round, "
+            f"{load['rss_kib_after_load'] / 1024:.1f} MiB after the load; "
+            f"{load['steps_per_s']:,.0f} checked steps/s in {load['seconds']:.0f} s"
+            f" (p50 {load['p50_us'] / 1e3:.1f} ms, p99 {load['p99_us'] / 1e3:.1f} ms per step; the"
+            " clients are threads of a few processes on the same cores as the server).",
+            "",
+        ]
     return "\n".join(lines)
 
 
@@ -561,8 +591,10 @@ def main() -> None:
         else:
             data = {"machine": machine(), "quick": args.quick, "server": run_server(args.quick)}
             write_atomic(args.server_out, json.dumps(data, indent=2))
+        if args.load_json.exists():
+            data["load_test"] = json.loads(args.load_json.read_text())
         splice(args.report, "server", server_section(data))
-        print(f"wrote {args.server_out} and the `server` section of {args.report}")
+        print(f"wrote the `server` section of {args.report}")
         return
     if args.render_only:
         write_report(args.report, json.loads(args.out.read_text()))
