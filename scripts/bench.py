@@ -519,7 +519,7 @@ def server_section(data: dict) -> str:
         " The round trip is grpcio's Python stream: dm_env_rpc's own `Connection` pays about the"
         " same, and `RemoteEnv` adds its tensor packing and Gymnasium conversions. Meeting the"
         " goal needs a client outside Python's gRPC (e.g. a Rust client in the extension module"
-        " with the GIL released); the server side is not the limit.",
+        " with the GIL released).",
         "",
         "Batched world, one client (`RemoteVectorEnv(address, N)`: one Step carries N lanes)"
         " against the native vector env at the same N:",
