@@ -1055,9 +1055,7 @@ class _ServerHolder:
     """The body of the Ray actor: one ``sixaxis_avoid.serve()`` server on its node."""
 
     def __init__(self, host: str, token: str | None, serve_kwargs: dict[str, Any]):
-        import sixaxis_avoid
-
-        self.server = sixaxis_avoid.serve(f"{host}:0", token=token, **serve_kwargs)
+        self.server = _core.serve(f"{host}:0", token=token, **serve_kwargs)
 
     def address(self) -> str:
         return self.server.address
