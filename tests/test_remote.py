@@ -423,3 +423,26 @@ def test_short_load_no_step_lost_or_crossed_and_memory_flat(sixaxis_bin):
     assert res["server_alive"]
     # Flat: the load after the warm-up adds no more than a few MB (its sessions are gone).
     assert res["rss_kib_after_load"] - res["rss_kib_after_warmup"] < 8 * 1024, res
+
+
+def test_worlds_are_freed_on_close_and_when_an_env_is_dropped():
+    """The server's world count (Server.worlds): close() destroys the world; an env dropped
+    without close() ends its stream, and the server frees the world."""
+    import gc
+
+    def wait_for(server, n):
+        deadline = time.monotonic() + 10
+        while server.worlds != n and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return server.worlds
+
+    with sixaxis_avoid.serve() as s:
+        env = RemoteEnv(s)
+        envs = RemoteVectorEnv([s, s], 4)
+        assert wait_for(s, 3) == 3
+        envs.close()
+        assert wait_for(s, 1) == 1
+        env.reset(seed=0)
+        del env
+        gc.collect()
+        assert wait_for(s, 0) == 0

@@ -586,10 +586,14 @@ class RemoteEnv(gym.Env):
             self._session.close()
 
     def __del__(self):
-        try:
-            self.close()
-        except Exception:
-            pass
+        # No goodbye at garbage collection (it could wait on a hung server): ending the
+        # stream frees the world on the server (docs/SERVER.md "Sessions and worlds").
+        s = getattr(self, "_session", None)
+        if s is not None:
+            try:
+                s._shutdown()
+            except Exception:
+                pass
 
 
 # The vector env --------------------------------------------------------------------------------
