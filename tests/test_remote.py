@@ -446,3 +446,15 @@ def test_worlds_are_freed_on_close_and_when_an_env_is_dropped():
         del env
         gc.collect()
         assert wait_for(s, 0) == 0
+
+
+def test_start_ray_servers_checks_its_arguments():
+    import ray
+    from sixaxis_avoid.remote import start_ray_servers
+
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="num_per_node"):
+            start_ray_servers(bad)
+    assert not ray.is_initialized()
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=r"ray\.init"):
+        start_ray_servers()
