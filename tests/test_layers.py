@@ -27,6 +27,7 @@ LAYERS = [
     "sixaxis_avoid.env",
     "sixaxis_avoid.vector",
     "sixaxis_avoid.sb3",
+    "sixaxis_avoid.remote",
     "sixaxis_avoid.verify",
     "sixaxis_avoid.animate",
     "sixaxis_avoid",

@@ -1,0 +1,460 @@
+"""The Gymnasium envs over the env server (sixaxis_avoid.remote; docs/SERVER.md
+"Gymnasium over the server"): checkers, parity with the in-process envs, errors, timeouts, a
+dropped server, closing, SB3, and a short load test (scripts/load_test.py)."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import threading
+import time
+from concurrent import futures
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import sixaxis_avoid
+from sixaxis_avoid.env import SixAxisAvoidEnv
+from sixaxis_avoid.remote import RemoteEnv, RemoteVectorEnv, ServerError
+from sixaxis_avoid.vector import SixAxisAvoidGoalVectorEnv, SixAxisAvoidVectorEnv
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _load_test_module():
+    """scripts/load_test.py, importable by name (its client processes are spawned and
+    import it again; spawn passes sys.path on)."""
+    scripts = str(ROOT / "scripts")
+    if scripts not in sys.path:
+        sys.path.insert(0, scripts)
+    return importlib.import_module("load_test")
+
+
+@pytest.fixture(scope="module")
+def server():
+    with sixaxis_avoid.serve() as s:
+        yield s
+
+
+@pytest.fixture(scope="module")
+def second_server():
+    with sixaxis_avoid.serve() as s:
+        yield s
+
+
+# Keywords ---------------------------------------------------------------------------------------
+BAD_KEYWORDS = [
+    {"reward_scale": -1},
+    {"reward_scale": float("nan")},
+    {"obs_type": "pixels"},
+    {"obs_type": "index", "random_target": True},
+    {"arm_aware": 3},
+    {"assist": "yes"},
+    {"random_target": "no"},
+    {"max_episode_steps": 0},
+    {"scenario": "no_such_scenario"},
+    {"render_mode": "human"},
+]
+
+
+@pytest.mark.parametrize("kw", BAD_KEYWORDS, ids=lambda kw: ",".join(kw))
+def test_bad_keywords_give_the_in_process_errors(kw):
+    """Checked before any connection, by the in-process envs' own checks: same type and
+    words (the vector env takes max_episode_steps; the native envs refuse to render)."""
+    with pytest.raises(Exception) as theirs:
+        SixAxisAvoidVectorEnv(2, **kw)
+    for make in (lambda: RemoteEnv("127.0.0.1:9", **kw), lambda: RemoteVectorEnv("x:1", 2, **kw)):
+        with pytest.raises(type(theirs.value)) as ours:
+            make()
+        if "render_mode" not in kw:
+            assert str(ours.value) == str(theirs.value)
+        else:
+            assert "render_mode" in str(ours.value)
+
+
+def test_unknown_keyword_is_a_type_error_naming_it():
+    with pytest.raises(TypeError, match="unexpected keyword argument 'rewardscale'"):
+        RemoteEnv("127.0.0.1:9", rewardscale=1.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'nope'"):
+        RemoteVectorEnv("127.0.0.1:9", 2, nope=1)
+
+
+def test_bad_vector_arguments():
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="num_envs"):
+        RemoteVectorEnv("127.0.0.1:9", 0)
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="more servers"):
+        RemoteVectorEnv(["a:1", "b:2", "c:3"], 2)
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="address"):
+        RemoteVectorEnv([], 2)
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="address"):
+        RemoteEnv(42)
+
+
+# Checkers ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("obs_type", ["vector", "index", "goal"])
+def test_gymnasium_check_env(server, obs_type):
+    from gymnasium.utils.env_checker import check_env
+
+    kw = {"random_target": True} if obs_type != "index" else {}
+    with RemoteEnv(server, obs_type=obs_type, **kw) as env:
+        check_env(env, skip_render_check=True)
+
+
+def test_sb3_check_env(server):
+    from stable_baselines3.common.env_checker import check_env
+
+    with RemoteEnv(server.address, random_target=True) as env:
+        check_env(env, warn=True)
+
+
+def test_observation_spaces_equal_the_in_process_ones(server, paper_simple):
+    for obs_type, local in (
+        ("vector", SixAxisAvoidEnv()),
+        ("index", SixAxisAvoidEnv(obs_type="index")),
+        ("goal", gym.make("SixAxisAvoidGoal-v0").unwrapped),
+    ):
+        with RemoteEnv(server, obs_type=obs_type) as env:
+            assert env.observation_space == local.observation_space
+            assert env.action_space == local.action_space
+
+
+# Parity -------------------------------------------------------------------------------------
+def _assert_same(a, b):
+    if isinstance(b, dict):
+        assert set(a) == set(b)
+        for k in b:
+            _assert_same(a[k], b[k])
+        return
+    np.testing.assert_array_equal(a, b)
+    assert np.asarray(a).dtype == np.asarray(b).dtype
+
+
+@pytest.mark.parametrize(
+    ("obs_type", "kw"),
+    [
+        ("vector", {"random_target": True}),
+        ("index", {"assist": False}),
+        ("goal", {"random_target": True, "arm_aware": True, "reward_scale": 1e-4}),
+    ],
+)
+def test_single_env_matches_in_process_step_for_step(server, near_target, obs_type, kw):
+    """Same seed and actions: same observations, rewards, flags and info, across resets
+    (truncation by the server at the scenario's cap, by TimeLimit in process)."""
+    env_id = "SixAxisAvoidGoal-v0" if obs_type == "goal" else "SixAxisAvoid-v0"
+    local_kw = kw if obs_type == "goal" else {"obs_type": obs_type, **kw}
+    local = sixaxis_avoid.make(env_id, near_target, **local_kw)
+    rng = np.random.default_rng(7)
+    ends = 0
+    with RemoteEnv(server, scenario=near_target, obs_type=obs_type, **kw) as env:
+        for seed in (3, None, 11):
+            o_r, i_r = env.reset(seed=seed)
+            o_l, i_l = local.reset(seed=seed)
+            _assert_same(o_r, o_l)
+            assert i_r == i_l
+            for _ in range(60):
+                a = int(rng.integers(0, 6))
+                r, lo = env.step(a), local.step(a)
+                _assert_same(r[0], lo[0])
+                assert r[1:4] == lo[1:4]
+                assert r[4] == lo[4]
+                if r[2] or r[3]:
+                    ends += 1
+                    break
+    assert ends >= 2  # episodes ended, both ways on near_target's 12-step cap
+
+
+def test_vector_env_matches_native_over_two_servers(server, second_server, near_target):
+    """Lanes split over two servers (and two worlds on one), stepped concurrently: bit for
+    bit the native vector env's trajectories, across autoresets and reseeding."""
+    n, kw = 7, {"scenario": near_target, "random_target": True, "max_episode_steps": 9}
+    native = SixAxisAvoidVectorEnv(n, **kw)
+    addresses = [server.address, second_server.address, server.address]
+    rng = np.random.default_rng(1)
+    ends = 0
+    with RemoteVectorEnv(addresses, n, **kw) as remote:
+        assert [w.n for w in remote._worlds] == [3, 2, 2]
+        for seed in (5, None, [20 + i for i in range(n)]):
+            _assert_same(remote.reset(seed=seed)[0], native.reset(seed=seed)[0])
+            for _ in range(40):
+                a = rng.integers(0, 6, size=n)
+                ours, theirs = remote.step(a), native.step(a)
+                for x, y in zip(ours[:4], theirs[:4]):
+                    _assert_same(x, y)
+                for key, value in ours[4].items():
+                    _assert_same(value, theirs[4][key])
+                ends += int(theirs[2].sum() + theirs[3].sum())
+    assert ends > 10
+
+
+def test_goal_vector_env_matches_native(server, near_target):
+    n, kw = 3, {"scenario": near_target, "random_target": True}
+    native = SixAxisAvoidGoalVectorEnv(n, **kw)
+    with RemoteVectorEnv(server, n, obs_type="goal", **kw) as remote:
+        assert remote.single_observation_space == native.single_observation_space
+        _assert_same(remote.reset(seed=2)[0], native.reset(seed=2)[0])
+        for a in np.random.default_rng(0).integers(0, 6, size=(30, n)):
+            for x, y in zip(remote.step(a)[:4], native.step(a)[:4]):
+                _assert_same(x, y)
+
+
+def test_one_lane_worlds_and_reset_mask_match_native(server, near_target):
+    n, kw = 4, {"scenario": near_target, "random_target": True}
+    native = SixAxisAvoidVectorEnv(n, **kw)
+    rng = np.random.default_rng(3)
+    with RemoteVectorEnv(server, n, lanes_per_world=1, **kw) as remote:
+        assert len(remote._worlds) == n
+        _assert_same(remote.reset(seed=0)[0], native.reset(seed=0)[0])
+        for k in range(50):
+            a = rng.integers(0, 6, size=n)
+            for x, y in zip(remote.step(a)[:4], native.step(a)[:4]):
+                _assert_same(x, y)
+            if k % 7 == 3:
+                mask = rng.random(n) < 0.5
+                _assert_same(
+                    remote.reset(options={"reset_mask": mask})[0],
+                    native.reset(options={"reset_mask": mask})[0],
+                )
+
+
+def test_vector_env_gymnasium_contract(server, near_target):
+    """What Gymnasium's vector API promises: spaces hold what is returned, next-step
+    autoreset (the step after an end: reward 0, not done), copies unless copy=False."""
+    n = 3
+    with RemoteVectorEnv(server, n, scenario=near_target) as envs:
+        assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+        obs, info = envs.reset(seed=0)
+        assert envs.observation_space.contains(obs)
+        assert set(info) >= {"is_success", "_is_success"}
+        # Lane 0 walks to the target (one cell below the start): action 5 is -z.
+        _, _, term, _, info = envs.step(np.array([5, 0, 0]))
+        assert term.tolist() == [True, False, False] and info["is_success"][0]
+        obs2, rew2, term2, trunc2, _ = envs.step(np.array([0, 0, 0]))
+        assert rew2[0] == 0.0 and not term2[0] and not trunc2[0]
+        assert envs.observation_space.contains(obs2)
+        obs3 = envs.step(envs.action_space.sample())[0]
+        assert obs3 is not obs2
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="actions"):
+            envs.step(np.array([0, 6, 0]))
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="actions"):
+            envs.step(np.zeros(2, dtype=int))
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="seed"):
+            envs.reset(seed=[1, 5, 9])
+
+
+def test_partial_reset_of_a_multi_lane_world_says_what_to_do(server):
+    with RemoteVectorEnv(server, 3) as envs:
+        envs.reset(seed=0)
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="lanes_per_world=1"):
+            envs.reset(options={"reset_mask": np.array([True, False, False])})
+
+
+# Errors, timeouts, a dropped server, closing ------------------------------------------------
+class _Silent:
+    """A gRPC server that accepts the stream and never answers."""
+
+    def __init__(self):
+        import grpc
+        from dm_env_rpc.v1 import dm_env_rpc_pb2_grpc
+
+        release = self.release = threading.Event()
+
+        class Servicer(dm_env_rpc_pb2_grpc.EnvironmentServicer):
+            def Process(self, request_iterator, context):
+                release.wait(30)
+                return iter(())
+
+        self.server = grpc.server(futures.ThreadPoolExecutor(max_workers=4))
+        dm_env_rpc_pb2_grpc.add_EnvironmentServicer_to_server(Servicer(), self.server)
+        self.address = f"127.0.0.1:{self.server.add_insecure_port('127.0.0.1:0')}"
+        self.server.start()
+
+    def stop(self):
+        self.release.set()
+        self.server.stop(0)
+
+
+def test_a_silent_server_times_out_naming_it():
+    silent = _Silent()
+    try:
+        t0 = time.monotonic()
+        with pytest.raises(TimeoutError, match=rf"{silent.address}.*CreateWorld.*timeout=0.3"):
+            RemoteEnv(silent.address, timeout=0.3)
+        assert time.monotonic() - t0 < 5
+    finally:
+        silent.stop()
+
+
+def test_no_server_is_a_connect_timeout():
+    import socket
+
+    with socket.socket() as s:  # a free port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(TimeoutError, match=rf"127.0.0.1:{port}.*connect_timeout"):
+        RemoteEnv(f"127.0.0.1:{port}", connect_timeout=0.5)
+
+
+def test_a_dropped_server_fails_every_later_call(sixaxis_bin):
+    load_test = _load_test_module()
+    proc, address = load_test.start_server(sixaxis_bin)
+    try:
+        env = RemoteEnv(address)
+        envs = RemoteVectorEnv(address, 2)
+        env.reset(seed=0)
+        envs.reset(seed=0)
+        env.step(0)
+        proc.kill()
+        proc.wait(10)
+        for _ in range(2):  # the first failure and every call after it
+            with pytest.raises(ConnectionError, match=address):
+                env.step(0)
+            with pytest.raises(ConnectionError, match=address):
+                envs.step(np.zeros(2, dtype=int))
+        env.close()  # closing a broken env does not raise
+        envs.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_the_token_is_required_and_accepted():
+    with sixaxis_avoid.serve(token="s3cret-token") as guarded:
+        with pytest.raises(PermissionError, match="token"):
+            RemoteEnv(guarded.address)
+        with pytest.raises(PermissionError, match="token"):
+            RemoteEnv(guarded.address, token="wrong")
+        with RemoteEnv(guarded.address, token="s3cret-token") as env:
+            env.reset(seed=0)
+            env.step(1)
+
+
+def test_close_leaves_and_destroys_the_world(server):
+    import grpc
+    from dm_env_rpc.v1 import connection, dm_env_rpc_pb2, error
+
+    env = RemoteEnv(server)
+    env.reset(seed=0)
+    name = env._session.world_name
+    env.close()
+    env.close()  # twice is fine
+    with pytest.raises(ConnectionError, match="closed"):
+        env.step(0)
+    with connection.Connection(grpc.insecure_channel(server.address)) as conn:
+        with pytest.raises(error.DmEnvRpcError):
+            conn.send(dm_env_rpc_pb2.JoinWorldRequest(world_name=name))
+
+
+def test_a_refused_setting_is_an_invalid_argument_error(server):
+    """The server's own check (here: a scenario that is valid JSON but no scenario) in the
+    in-process words; other refusals are ServerError."""
+    from sixaxis_avoid.remote import _Session
+
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="num_envs"):
+        _Session(
+            server.address,
+            {"num_envs": np.int64(-3)},
+            token=None,
+            credentials=None,
+            timeout=10,
+            connect_timeout=5,
+        )
+    assert issubclass(ServerError, RuntimeError)
+
+
+# Stable-Baselines3 ----------------------------------------------------------------------------
+def test_sb3_vecenv_matches_the_native_one(server, near_target):
+    from sixaxis_avoid.remote import RemoteSB3VecEnv
+    from sixaxis_avoid.sb3 import SixAxisVecEnv
+
+    kw = {"scenario": near_target, "random_target": True, "max_episode_steps": 8}
+    ours, theirs = RemoteSB3VecEnv(server, 3, seed=4, **kw), SixAxisVecEnv(3, seed=4, **kw)
+    np.testing.assert_array_equal(ours.reset(), theirs.reset())
+    dones = 0
+    for a in np.random.default_rng(2).integers(0, 6, size=(60, 3)):
+        o1, r1, d1, i1 = ours.step(a)
+        o2, r2, d2, i2 = theirs.step(a)
+        np.testing.assert_array_equal(o1, o2)
+        np.testing.assert_array_equal(r1, r2)
+        np.testing.assert_array_equal(d1, d2)
+        for x, y in zip(i1, i2):
+            assert set(x) == set(y)
+            for k in x:
+                np.testing.assert_array_equal(x[k], y[k])
+        dones += int(d1.sum())
+    assert dones > 5
+    ours.close()
+
+
+def test_sb3_ppo_trains_through_remote_envs(server):
+    """PPO on four remote lanes: the run completes with finite losses and the policy's
+    greedy episode reaches the target more often than the untrained one (near target)."""
+    from sixaxis_avoid.remote import RemoteSB3VecEnv
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    venv = VecMonitor(RemoteSB3VecEnv(server, 4, seed=0, reward_scale=1e-4, max_episode_steps=40))
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=128,
+        batch_size=128,
+        n_epochs=4,
+        seed=0,
+        device="cpu",
+        policy_kwargs={"net_arch": [32]},
+    )
+    model.learn(total_timesteps=2048)
+    assert model.num_timesteps >= 2048
+    losses = model.logger.name_to_value
+    assert np.isfinite(losses["train/loss"]) and np.isfinite(losses["train/value_loss"])
+    assert len(model.ep_info_buffer) >= 40  # episodes ended at the 40-step cap and counted
+    venv.close()
+
+
+# Load -----------------------------------------------------------------------------------------
+def test_short_load_no_step_lost_or_crossed_and_memory_flat(sixaxis_bin):
+    """16 concurrent sessions x 1,000 steps, each checked step for step against the
+    in-process env (scripts/load_test.py runs 64 x 10,000)."""
+    res = _load_test_module().run(16, 1000, sixaxis_bin, warmup_steps=100)
+    assert res["errors"] == [] and res["warmup_errors"] == []
+    assert res["steps_checked"] == 16 * 1000
+    assert res["episodes"] > 16 * 10
+    assert res["server_alive"]
+    # Flat: the load after the warm-up adds no more than a few MB (its sessions are gone).
+    assert res["rss_kib_after_load"] - res["rss_kib_after_warmup"] < 8 * 1024, res
+
+
+def test_worlds_are_freed_on_close_and_when_an_env_is_dropped():
+    """The server's world count (Server.worlds): close() destroys the world; an env dropped
+    without close() ends its stream, and the server frees the world."""
+    import gc
+
+    def wait_for(server, n):
+        deadline = time.monotonic() + 10
+        while server.worlds != n and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return server.worlds
+
+    with sixaxis_avoid.serve() as s:
+        env = RemoteEnv(s)
+        envs = RemoteVectorEnv([s, s], 4)
+        assert wait_for(s, 3) == 3
+        envs.close()
+        assert wait_for(s, 1) == 1
+        env.reset(seed=0)
+        del env
+        gc.collect()
+        assert wait_for(s, 0) == 0
+
+
+def test_start_ray_servers_checks_its_arguments():
+    import ray
+    from sixaxis_avoid.remote import start_ray_servers
+
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="num_per_node"):
+            start_ray_servers(bad)
+    assert not ray.is_initialized()
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=r"ray\.init"):
+        start_ray_servers()

@@ -1,0 +1,142 @@
+"""start_ray_servers on a two-node Ray cluster started on loopback (docs/SERVER.md "Across
+machines (Ray)"): one server per node, pinned there, driven by one RemoteVectorEnv.
+
+The cluster is two `ray start` nodes with their own temp dirs; cleanup ends exactly the
+processes of those two nodes (found by their temp dirs and port, then their children), never
+every Ray process of the machine as `ray stop` would.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import ray
+from sixaxis_avoid.remote import RemoteVectorEnv, start_ray_servers
+from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
+
+RAY = str(Path(sys.executable).with_name("ray"))
+# Token auth of the Ray cluster itself off: a token left in ~/.ray would switch it on.
+ENV = {**os.environ, "RAY_AUTH_MODE": "disabled", "RAY_USAGE_STATS_ENABLED": "0"}
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _pids_of(markers: list[str], port: int) -> set[int]:
+    """Ray's processes whose command line holds a marker (a temp dir) or the head's port,
+    and all their descendants."""
+    found: set[int] = set()
+    parents: dict[int, int] = {}
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            cmd = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            ppid = int((proc / "stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        parents[int(proc.name)] = ppid
+        if any(m in cmd for m in markers) or ("ray" in cmd and f":{port} " in f"{cmd} "):
+            found.add(int(proc.name))
+    grew = True
+    while grew:
+        grew = False
+        for pid, ppid in parents.items():
+            if ppid in found and pid not in found:
+                found.add(pid)
+                grew = True
+    found.discard(os.getpid())
+    return found
+
+
+def _end(pids: set[int]) -> None:
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        for pid in pids:
+            try:
+                os.kill(pid, sig)
+            except ProcessLookupError:
+                pass
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline and any(Path(f"/proc/{p}").exists() for p in pids):
+            time.sleep(0.2)
+
+
+@pytest.fixture(scope="module")
+def two_node_cluster():
+    port = _free_port()
+    dirs = [tempfile.mkdtemp(prefix="sixaxis-ray-head-"), tempfile.mkdtemp(prefix="sixaxis-ray-")]
+    common = ["--node-ip-address=127.0.0.1", "--num-cpus=1", "--disable-usage-stats"]
+    try:
+        subprocess.run(
+            [RAY, "start", "--head", f"--port={port}", f"--temp-dir={dirs[0]}", *common,
+             "--include-dashboard=false"],
+            env=ENV, check=True, capture_output=True, timeout=180,
+        )  # fmt: skip
+        subprocess.run(
+            [RAY, "start", f"--address=127.0.0.1:{port}", f"--temp-dir={dirs[1]}", *common],
+            env=ENV, check=True, capture_output=True, timeout=180,
+        )  # fmt: skip
+        os.environ["RAY_AUTH_MODE"] = "disabled"
+        ray.init(address=f"127.0.0.1:{port}", log_to_driver=False)
+        deadline = time.monotonic() + 60
+        while len([n for n in ray.nodes() if n["Alive"]]) < 2 and time.monotonic() < deadline:
+            time.sleep(0.5)
+        yield
+    finally:
+        if ray.is_initialized():
+            ray.shutdown()
+        _end(_pids_of(dirs, port))
+        for d in dirs:
+            shutil.rmtree(d, ignore_errors=True)
+
+
+def test_one_server_per_node_driven_by_one_vector_env(two_node_cluster):
+    nodes = [n for n in ray.nodes() if n["Alive"]]
+    assert len(nodes) == 2
+    servers = start_ray_servers()
+    try:
+        assert len(servers) == 2 and all(isinstance(a, str) for a in servers)
+        assert sorted(servers.node_ids) == sorted(n["NodeID"] for n in nodes)
+        assert len(set(servers)) == 2  # two servers, two ports
+        # Each binds its node's address; off loopback only with a (generated) token.
+        ips = {n["NodeID"]: n["NodeManagerAddress"] for n in nodes}
+        for address, node in zip(servers, servers.node_ids):
+            assert address.rsplit(":", 1)[0] == ips[node]
+        if any(not ip.startswith("127.") for ip in ips.values()):
+            assert servers.token is not None and len(servers.token) >= 32
+        # Each actor runs on the node it was pinned to.
+        where = ray.get([a.node_id.remote() for a in servers.actors])
+        assert where == servers.node_ids
+        n, kw = 6, {"random_target": True, "max_episode_steps": 10}
+        native = SixAxisAvoidVectorEnv(n, **kw)
+        with RemoteVectorEnv(servers, n, token=servers.token, **kw) as remote:
+            np.testing.assert_array_equal(remote.reset(seed=1)[0], native.reset(seed=1)[0])
+            for a in np.random.default_rng(0).integers(0, 6, size=(25, n)):
+                for x, y in zip(remote.step(a)[:4], native.step(a)[:4]):
+                    np.testing.assert_array_equal(x, y)
+    finally:
+        servers.stop()
+    assert servers.actors == []
+
+
+def test_a_given_token_is_used(two_node_cluster):
+    with start_ray_servers(token="given-token-0123456789") as servers:
+        assert servers.token == "given-token-0123456789"
+        with pytest.raises(PermissionError):
+            RemoteVectorEnv(servers, 2, connect_timeout=20)
+        with RemoteVectorEnv(servers, 2, token=servers.token) as remote:
+            remote.reset(seed=0)
+            remote.step(np.array([0, 1]))
