@@ -15,8 +15,8 @@ mod plan;
 mod planner;
 mod request;
 mod scenario;
-mod tables;
 mod serve;
+mod tables;
 mod train;
 mod util;
 
