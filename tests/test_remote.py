@@ -348,7 +348,7 @@ def test_close_leaves_and_destroys_the_world(server):
 def test_a_refused_setting_is_an_invalid_argument_error(server):
     """The server's own check (here: a scenario that is valid JSON but no scenario) in the
     in-process words; other refusals are ServerError."""
-    from sixaxis_avoid.remote import _Session
+    from sixaxis_avoid.remote._session import _Session
 
     with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="num_envs"):
         _Session(
