@@ -350,7 +350,7 @@ class SixAxisAvoidJointVectorEnv(NativeVectorEnv):
     env's keys as arrays, each with its ``_key`` mask; ``joints`` (``(N, 6)``, rad) and
     ``terminal_mm`` (``(N, 3)``) give each env's state."""
 
-    _SHARED_ATTRS: ClassVar[tuple[str, ...]] = (
+    SHARED_ATTRS: ClassVar[tuple[str, ...]] = (
         "scenario",
         "obs_type",
         "max_episode_steps",
@@ -359,7 +359,9 @@ class SixAxisAvoidJointVectorEnv(NativeVectorEnv):
         "link_radius_mm",
         "obs_layout",
     )
-    _INFO_KEYS: ClassVar[tuple[str, ...]] = JOINT_INFO_KEYS
+    INFO_KEYS: ClassVar[tuple[str, ...]] = JOINT_INFO_KEYS
+    #: No rendering (the SB3 VecEnv refuses render keywords).
+    RENDERS: ClassVar[bool] = False
 
     def __init__(
         self,

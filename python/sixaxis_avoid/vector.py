@@ -132,6 +132,15 @@ class SixAxisAvoidVectorEnv(NativeVectorEnv):
     (``cell_of``, ``state_of``, ``goal_to_cell``) are public.
     """
 
+    #: The per-env info keys (the SB3 VecEnv's info dicts).
+    INFO_KEYS: ClassVar[tuple[str, ...]] = (
+        "collided",
+        "distance_to_target",
+        "cell",
+        "is_success",
+        "detour_penalty",
+    )
+
     def __init__(
         self,
         num_envs: int = 1,
