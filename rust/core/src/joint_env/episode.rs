@@ -92,7 +92,7 @@ impl JointEpisode {
         let to: Joints = std::array::from_fn(|i| self.q[i] + dq[i]);
         let (refused, substeps) = if model.within_limits(&to) {
             (
-                !model.motion_is_clear(&self.q, &to),
+                !model.motion_is_clear_from(&self.q, &to, self.clearance_mm(model)),
                 model.substeps(&self.q, &to),
             )
         } else {

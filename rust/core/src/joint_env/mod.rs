@@ -29,7 +29,9 @@
 //!   arm point over one step is at most `Σ |Δq_i| L_i` mm long, so between two checked poses
 //!   it moves at most `substep_fraction · safe_distance_mm` mm: every pose of the continuous
 //!   motion keeps a gap >= `(1 - substep_fraction / 2) · safe_distance_mm` > 0, and no link
-//!   passes through a box.
+//!   passes through a box. A step that starts with a gap g (mm, the smallest link gap of
+//!   the observation) and has `g - Σ |Δq_i| L_i > safe_distance_mm` needs no check at all:
+//!   no point can come closer than g minus its path.
 //! - **Observation** ([`JointModel::obs_dim`] float32, [`ObsLayout`]): sin q (6), cos q (6),
 //!   terminal position / reach (3), target / reach (3) (reach: the polyline's length, mm, so
 //!   both lie in [-1, 1]), per link the gap g (mm) as `g / (g + safe_distance_mm)` in [0, 1]
@@ -588,16 +590,34 @@ impl JointModel {
     /// Sub-steps of the move `from -> to` (rad): `max(1, ceil(Σ |Δq_i| L_i / (substep_fraction ·
     /// safe_distance_mm)))` (the module docs derive the bound).
     pub fn substeps(&self, from: &Joints, to: &Joints) -> u32 {
-        let path_mm: f64 = (0..6)
-            .map(|i| (to[i] - from[i]).abs() * self.lever_mm[i])
-            .sum();
+        let path_mm = self.path_bound_mm(from, to);
         let per = self.opts.substep_fraction * self.safe_distance_mm;
         ((path_mm / per).ceil() as u32).max(1)
+    }
+
+    /// Upper bound (mm) of the path length of any arm point over the move `from -> to`
+    /// (rad): `Σ_i |Δq_i| L_i`.
+    #[inline]
+    pub fn path_bound_mm(&self, from: &Joints, to: &Joints) -> f64 {
+        (0..6)
+            .map(|i| (to[i] - from[i]).abs() * self.lever_mm[i])
+            .sum()
     }
 
     /// Whether the move `from -> to` (rad, linear in joint space) is clear at each of its
     /// [`JointModel::substeps`] interpolated poses (`k = 1..=n`, the end pose first).
     pub fn motion_is_clear(&self, from: &Joints, to: &Joints) -> bool {
+        self.motion_is_clear_from(from, to, 0.0)
+    }
+
+    /// [`JointModel::motion_is_clear`] knowing that pose `from` has the gap `from_gap_mm`
+    /// (mm; 0 when unknown): when `from_gap_mm - path_bound_mm(from, to) > safe_distance_mm`
+    /// no point of the arm can come within the safe distance during the move (each moves at
+    /// most the path bound), so no pose needs a check; otherwise every sub-step is checked.
+    pub fn motion_is_clear_from(&self, from: &Joints, to: &Joints, from_gap_mm: f64) -> bool {
+        if from_gap_mm - self.path_bound_mm(from, to) > self.safe_distance_mm {
+            return true;
+        }
         let n = self.substeps(from, to);
         if !self.pose_is_clear(to) {
             return false;
