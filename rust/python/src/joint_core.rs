@@ -326,6 +326,9 @@ macro_rules! joint_pymethods {
     };
 }
 
+/// What `JointEnvCore.step` returns: observation, reward, terminated, info.
+type StepResult<'py> = (Bound<'py, PyArray1<f32>>, f64, bool, Bound<'py, PyDict>);
+
 /// One joint-space env. Used by `SixAxisAvoidJointEnv`.
 #[pyclass(name = "JointEnvCore", module = "sixaxis_avoid._core")]
 pub struct PyJointEnvCore {
@@ -403,7 +406,7 @@ joint_pymethods!(
             &mut self,
             py: Python<'py>,
             action: &Bound<'py, PyAny>,
-        ) -> PyResult<(Bound<'py, PyArray1<f32>>, f64, bool, Bound<'py, PyDict>)> {
+        ) -> PyResult<StepResult<'py>> {
             let a = action_of(py, action)?;
             let (ep, model) = (&mut self.ep, &self.model);
             let out = run_attached(py, || ep.step(model, &a))?;
