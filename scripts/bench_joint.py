@@ -1,8 +1,11 @@
 """Step rates of the joint-space env (docs/PERFORMANCE.md, "Joint-space env"), with the
 anchors FetchReach-v4 (Gymnasium-Robotics, MuJoCo) and PandaReach-v3 (panda-gym, PyBullet)
-when they are installed. Short runs; every knob a flag; JSON out.
+when they are installed; and (``baseline``) SB3 SAC / TD3, optionally with HER on the goal
+id, with success rates over seeds and the terminal's path length against Algorithm 2's plan
+(docs/JOINT.md, "Baselines"). Short runs; every knob a flag; JSON out.
 
-    taskset -c 0 python scripts/bench_joint.py --json docs/results/bench_joint.json
+    taskset -c 0 python scripts/bench_joint.py --json bench_joint.json
+    python scripts/bench_joint.py baseline --algo sac --timesteps 20000 --seeds 0,1 --json sac.json
 """
 
 from __future__ import annotations
@@ -71,7 +74,120 @@ def world_with_obstacles(count: int, seed: int) -> _core.Scenario:
     return s.replace(obstacles=sorted(cells), bounds={"min": [-8, -8, -8], "max": [8, 8, 8]})
 
 
+def path_length_mm(points: np.ndarray) -> float:
+    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
+
+
+def baseline(argv: list[str]) -> int:
+    """Train SB3 SAC / TD3 (``--her``: on SixAxisAvoidJointGoal-v0 with HerReplayBuffer) for
+    each seed, then evaluate the deterministic policy: success rate, mean return, terminal
+    path length (mm) of the successful episodes, and Algorithm 2's terminal path (mm)."""
+    p = argparse.ArgumentParser(prog="bench_joint.py baseline", description=baseline.__doc__)
+    p.add_argument("--algo", choices=("sac", "td3"), default="sac")
+    p.add_argument("--her", action="store_true", help="HER on the goal-conditioned id")
+    p.add_argument("--scenario", default="paper_simple")
+    p.add_argument("--timesteps", type=int, default=20_000)
+    p.add_argument("--seeds", default="0,1,2,3,4")
+    p.add_argument("--max-episode-steps", type=int, default=200)
+    p.add_argument("--eval-episodes", type=int, default=1)
+    p.add_argument("--learning-rate", type=float, default=3e-4)
+    p.add_argument("--batch-size", type=int, default=256)
+    p.add_argument("--gamma", type=float, default=0.98)
+    p.add_argument("--learning-starts", type=int, default=1000)
+    p.add_argument("--net", default="256,256", help="hidden layer sizes")
+    p.add_argument("--torch-threads", type=int, default=1)
+    p.add_argument("--json", default=None)
+    a = p.parse_args(argv)
+    import torch
+    from stable_baselines3 import SAC, TD3, HerReplayBuffer
+
+    torch.set_num_threads(a.torch_threads)
+    scenario = (
+        sixaxis_avoid.generate_scenario(int(a.scenario.split(":")[1]))
+        if a.scenario.startswith("generated:")
+        else _core.Scenario(a.scenario)
+    )
+    env_id = sixaxis_avoid.JOINT_GOAL_ENV_ID if a.her else sixaxis_avoid.JOINT_ENV_ID
+    plan = sixaxis_avoid.plan(scenario, seed=0)
+    alg2_mm = (
+        path_length_mm(np.array(plan.path, dtype=float) * scenario.cell_mm)
+        if plan.success
+        else None
+    )
+    algo = {"sac": SAC, "td3": TD3}[a.algo]
+    runs = []
+    for seed in [int(v) for v in a.seeds.split(",")]:
+        env = gym.make(env_id, scenario=scenario, max_episode_steps=a.max_episode_steps)
+        kwargs: dict = {
+            "learning_rate": a.learning_rate,
+            "batch_size": a.batch_size,
+            "gamma": a.gamma,
+            "learning_starts": a.learning_starts,
+            "policy_kwargs": {"net_arch": [int(v) for v in a.net.split(",")]},
+            "seed": seed,
+            "verbose": 0,
+            "device": "cpu",
+        }
+        if a.her:
+            kwargs["replay_buffer_class"] = HerReplayBuffer
+            kwargs["replay_buffer_kwargs"] = {"copy_info_dict": True}
+        policy = "MultiInputPolicy" if a.her else "MlpPolicy"
+        t0 = time.perf_counter()
+        model = algo(policy, env, **kwargs).learn(a.timesteps)
+        train_s = time.perf_counter() - t0
+        successes, returns, lengths = 0, [], []
+        for k in range(a.eval_episodes):
+            obs, _ = env.reset(seed=10_000 + k)
+            u = env.unwrapped
+            points, total, done = [u.terminal_mm], 0.0, False
+            info: dict = {}
+            while not done:
+                action, _ = model.predict(obs, deterministic=True)
+                obs, r, te, tr, info = env.step(action)
+                total += float(r)
+                points.append(u.terminal_mm)
+                done = te or tr
+            returns.append(total)
+            if info.get("is_success"):
+                successes += 1
+                lengths.append(path_length_mm(np.array(points)))
+        runs.append(
+            {
+                "seed": seed,
+                "success_rate": successes / a.eval_episodes,
+                "mean_return": float(np.mean(returns)),
+                "terminal_path_mm": lengths,
+                "train_seconds": train_s,
+            }
+        )
+        print(json.dumps(runs[-1]), flush=True)
+    rates = np.array([r["success_rate"] for r in runs])
+    # A Wilson interval of the success rate over every evaluated episode of every seed.
+    n = len(rates) * a.eval_episodes
+    k = float(rates.sum() * a.eval_episodes)
+    z = 1.96
+    centre = (k + z * z / 2) / (n + z * z)
+    half = z * np.sqrt(k * (n - k) / n + z * z / 4) / (n + z * z)
+    out = {
+        "machine": _core.machine(),
+        "args": vars(a),
+        "env_id": env_id,
+        "runs": runs,
+        "success_rate": float(rates.mean()),
+        "success_rate_95ci": [max(0.0, centre - half), min(1.0, centre + half)],
+        "algorithm2_terminal_path_mm": alg2_mm,
+    }
+    text = json.dumps(out, indent=2)
+    print(text)
+    if a.json:
+        _core.write_atomic(a.json, text + "\n")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["baseline"]:
+        return baseline(argv[1:])
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--single-steps", type=int, default=20_000)
     p.add_argument("--num-envs", type=int, default=1024)
