@@ -26,6 +26,7 @@ LAYERS = [
     "sixaxis_avoid.render",
     "sixaxis_avoid.env",
     "sixaxis_avoid.vector",
+    "sixaxis_avoid.joint",
     "sixaxis_avoid.sb3",
     "sixaxis_avoid.remote._session",
     "sixaxis_avoid.remote.env",

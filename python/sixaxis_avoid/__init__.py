@@ -2,7 +2,8 @@
 
 Importing the package registers the Gymnasium ids ``SixAxisAvoid-v0``,
 ``SixAxisAvoidArm-v0`` (arm-aware) and ``SixAxisAvoidGoal-v0`` (goal-conditioned, for
-hindsight experience replay), each with a native Rust-batched vector env::
+hindsight experience replay), and the joint-space ``SixAxisAvoidJoint-v0`` and
+``SixAxisAvoidJointGoal-v0`` (docs/JOINT.md), each with a native Rust-batched vector env::
 
     import gymnasium as gym
     import sixaxis_avoid
@@ -51,29 +52,60 @@ from sixaxis_avoid._core import (
     train,
     unreachable_cells,
 )
-from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
+from sixaxis_avoid._ids import (
+    ARM_ENV_ID,
+    ENV_ID,
+    GOAL_ENV_ID,
+    JOINT_ENV_ID,
+    JOINT_GOAL_ENV_ID,
+)
 
 #: Step cap of the registrations: the default scenario's ``learning.max_steps_per_episode``.
 MAX_EPISODE_STEPS = Scenario().max_steps_per_episode
 
 
-#: The registrations: id -> (env class, native vector env class, default keywords).
+#: Step cap of the joint-space registrations (the core's default ``max_episode_steps``).
+JOINT_MAX_EPISODE_STEPS = 500
+
+#: The registrations: id -> (env class, native vector env class, default keywords, step cap).
 _REGISTRATIONS = {
-    ENV_ID: ("SixAxisAvoidEnv", "SixAxisAvoidVectorEnv", {}),
-    ARM_ENV_ID: ("SixAxisAvoidEnv", "SixAxisAvoidVectorEnv", {"arm_aware": True}),
-    GOAL_ENV_ID: ("SixAxisAvoidGoalEnv", "SixAxisAvoidGoalVectorEnv", {}),
+    ENV_ID: ("env:SixAxisAvoidEnv", "vector:SixAxisAvoidVectorEnv", {}, MAX_EPISODE_STEPS),
+    ARM_ENV_ID: (
+        "env:SixAxisAvoidEnv",
+        "vector:SixAxisAvoidVectorEnv",
+        {"arm_aware": True},
+        MAX_EPISODE_STEPS,
+    ),
+    GOAL_ENV_ID: (
+        "env:SixAxisAvoidGoalEnv",
+        "vector:SixAxisAvoidGoalVectorEnv",
+        {},
+        MAX_EPISODE_STEPS,
+    ),
+    JOINT_ENV_ID: (
+        "joint:SixAxisAvoidJointEnv",
+        "joint:SixAxisAvoidJointVectorEnv",
+        {},
+        JOINT_MAX_EPISODE_STEPS,
+    ),
+    JOINT_GOAL_ENV_ID: (
+        "joint:SixAxisAvoidJointGoalEnv",
+        "joint:SixAxisAvoidJointGoalVectorEnv",
+        {},
+        JOINT_MAX_EPISODE_STEPS,
+    ),
 }
 
 
 def _register() -> None:
-    for env_id, (env_cls, vec_cls, kwargs) in _REGISTRATIONS.items():
+    for env_id, (env_cls, vec_cls, kwargs, cap) in _REGISTRATIONS.items():
         if env_id in gym.registry:
             continue
         gym.register(
             id=env_id,
-            entry_point=f"sixaxis_avoid.env:{env_cls}",
-            vector_entry_point=f"sixaxis_avoid.vector:{vec_cls}",
-            max_episode_steps=MAX_EPISODE_STEPS,
+            entry_point=f"sixaxis_avoid.{env_cls}",
+            vector_entry_point=f"sixaxis_avoid.{vec_cls}",
+            max_episode_steps=cap,
             kwargs=kwargs,
         )
 
@@ -101,6 +133,9 @@ __all__ = [
     "ARM_ENV_ID",
     "ENV_ID",
     "GOAL_ENV_ID",
+    "JOINT_ENV_ID",
+    "JOINT_GOAL_ENV_ID",
+    "JOINT_MAX_EPISODE_STEPS",
     "MAX_EPISODE_STEPS",
     "Arm",
     "InternalError",

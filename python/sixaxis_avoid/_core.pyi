@@ -17,6 +17,8 @@ __all__ = [
     "EnvCore",
     "InternalError",
     "InvalidArgumentError",
+    "JointEnvCore",
+    "JointVecEnvCore",
     "PlanResult",
     "PosePlanner",
     "QTableMismatchError",
@@ -220,7 +222,7 @@ def train(
     episode_cap: int | None = None,
     # <<< options:train
 ) -> TrainResult: ...
-def check_options(function: Literal["env"], **kwargs: Any) -> dict[str, Any]: ...
+def check_options(function: Literal["env", "joint"], **kwargs: Any) -> dict[str, Any]: ...
 def options(
     function: Literal["train", "plan", "generate_scenario", "env"] = "train",
     scenario: _ScenarioLike = None,
@@ -360,6 +362,93 @@ class VecEnvCore:
     reward_scale: float
     random_target: bool
     assist: tuple[bool, bool]
+
+@final
+class JointEnvCore:
+    def __new__(
+        cls, scenario: _ScenarioLike = None, options: dict[str, Any] | None = None
+    ) -> Self: ...
+    def reset(self) -> tuple[npt.NDArray[np.float32], dict[str, Any]]: ...
+    def step(
+        self, action: Sequence[float] | npt.NDArray[np.floating[Any]]
+    ) -> tuple[npt.NDArray[np.float32], float, bool, dict[str, Any]]: ...
+    def pose_is_clear(self, q: Sequence[float]) -> bool: ...
+    def link_gaps_mm(self, q: Sequence[float]) -> list[float]: ...
+    def substeps(self, from_q: Sequence[float], to_q: Sequence[float]) -> int: ...
+    def compute_reward(
+        self,
+        previous_achieved_goal: npt.NDArray[np.float32],
+        achieved_goal: npt.NDArray[np.float32],
+        desired_goal: npt.NDArray[np.float32],
+        refused: npt.NDArray[np.bool_],
+        detour_penalty: npt.NDArray[np.float64],
+    ) -> npt.NDArray[np.float64]: ...
+    obs_dim: int
+    obs_layout: dict[str, Any]
+    num_links: int
+    links: list[int]
+    reach_mm: float
+    safe_distance_mm: float
+    link_radius_mm: float
+    target_mm: tuple[float, float, float]
+    beta0_rad: list[float]
+    joint_limits_rad: list[tuple[float, float]]
+    max_episode_steps: int
+    max_joint_step_deg: float
+    target_tolerance_mm: float
+    scenario: Scenario
+    joints: list[float]
+    terminal_mm: tuple[float, float, float]
+    steps: int
+
+@final
+class JointVecEnvCore:
+    def __new__(
+        cls,
+        scenario: _ScenarioLike = None,
+        *,
+        num_envs: int,
+        options: dict[str, Any] | None = None,
+    ) -> Self: ...
+    def reset(self, mask: npt.NDArray[np.bool_] | None = None) -> None: ...
+    def step(self, actions: npt.NDArray[np.float64]) -> None: ...
+    def pose_is_clear(self, q: Sequence[float]) -> bool: ...
+    def link_gaps_mm(self, q: Sequence[float]) -> list[float]: ...
+    def substeps(self, from_q: Sequence[float], to_q: Sequence[float]) -> int: ...
+    def compute_reward(
+        self,
+        previous_achieved_goal: npt.NDArray[np.float32],
+        achieved_goal: npt.NDArray[np.float32],
+        desired_goal: npt.NDArray[np.float32],
+        refused: npt.NDArray[np.bool_],
+        detour_penalty: npt.NDArray[np.float64],
+    ) -> npt.NDArray[np.float64]: ...
+    obs_dim: int
+    obs_layout: dict[str, Any]
+    num_links: int
+    links: list[int]
+    reach_mm: float
+    safe_distance_mm: float
+    link_radius_mm: float
+    target_mm: tuple[float, float, float]
+    beta0_rad: list[float]
+    joint_limits_rad: list[tuple[float, float]]
+    max_episode_steps: int
+    max_joint_step_deg: float
+    target_tolerance_mm: float
+    num_envs: int
+    observations: npt.NDArray[np.float32]
+    rewards: npt.NDArray[np.float64]
+    terminated: npt.NDArray[np.bool_]
+    truncated: npt.NDArray[np.bool_]
+    refused: npt.NDArray[np.bool_]
+    distance_to_target: npt.NDArray[np.float64]
+    clearance: npt.NDArray[np.float64]
+    detour_penalty: npt.NDArray[np.float64]
+    joints: npt.NDArray[np.float64]
+    terminal_mm: npt.NDArray[np.float64]
+    previous_achieved_goal: npt.NDArray[np.float32]
+    steps: npt.NDArray[np.uint32]
 
 @final
 class PlanResult:

@@ -8,3 +8,7 @@ ENV_ID = "SixAxisAvoid-v0"
 ARM_ENV_ID = "SixAxisAvoidArm-v0"
 #: The goal-conditioned variant (``sixaxis_avoid.env.SixAxisAvoidGoalEnv``).
 GOAL_ENV_ID = "SixAxisAvoidGoal-v0"
+#: The whole arm in joint space (``sixaxis_avoid.joint.SixAxisAvoidJointEnv``).
+JOINT_ENV_ID = "SixAxisAvoidJoint-v0"
+#: Its goal-conditioned variant (``sixaxis_avoid.joint.SixAxisAvoidJointGoalEnv``).
+JOINT_GOAL_ENV_ID = "SixAxisAvoidJointGoal-v0"

@@ -32,9 +32,9 @@ import numpy as np
 
 from sixaxis_avoid._checks import check_choice, invalid
 from sixaxis_avoid._deps import require
-from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID
+from sixaxis_avoid._ids import ARM_ENV_ID, ENV_ID, GOAL_ENV_ID, JOINT_ENV_ID, JOINT_GOAL_ENV_ID
 from sixaxis_avoid.env import ENV_DEFAULTS, check_keywords, check_render_size
-from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
+from sixaxis_avoid.vector import NativeVectorEnv
 
 _vec_env = require("stable_baselines3.common.vec_env", "sixaxis_avoid.sb3")
 VecEnv = _vec_env.VecEnv
@@ -58,9 +58,9 @@ _STATE_ATTRS = ("cell", "target_cell", "elapsed_steps", "path")
 _STATELESS_METHODS = ("compute_reward", "cell_of", "state_of", "goal_to_cell")
 
 
-def _vector_env_class(env_id: Any) -> tuple[type[SixAxisAvoidVectorEnv], dict[str, Any]]:
+def _vector_env_class(env_id: Any) -> tuple[type[NativeVectorEnv], dict[str, Any]]:
     """The native vector env class and default keywords of one of our Gymnasium ids."""
-    ours = (ENV_ID, ARM_ENV_ID, GOAL_ENV_ID)
+    ours = (ENV_ID, ARM_ENV_ID, GOAL_ENV_ID, JOINT_ENV_ID, JOINT_GOAL_ENV_ID)
     if env_id not in ours:
         raise invalid("env_id", env_id, "must be one of " + ", ".join(repr(i) for i in ours))
     spec = gym.spec(env_id)
@@ -100,6 +100,10 @@ class SixAxisVecEnv(VecEnv):
     stateless methods (``compute_reward`` for HER on the goal id, ``cell_of``, ``state_of``,
     ``goal_to_cell``), which the native vector env provides for all its envs.
     ``env_is_wrapped`` is ``False``: no Gymnasium wrapper is involved.
+
+    The joint-space ids (``"SixAxisAvoidJoint-v0"``, ``"SixAxisAvoidJointGoal-v0"``) take
+    their own keywords (docs/JOINT.md), do not render, and read their configuration through
+    the vector env's ``SHARED_ATTRS``; their infos are the keys of its ``INFO_KEYS``.
     """
 
     def __init__(
@@ -109,15 +113,20 @@ class SixAxisVecEnv(VecEnv):
         env_id: str = ENV_ID,
         **env_kwargs: Any,
     ):
-        render_mode = env_kwargs.pop("render_mode", ENV_DEFAULTS["render_mode"])
-        check_choice("render_mode", render_mode, (None, "rgb_array"))
-        self.render_arm = check_keywords(
-            render_arm=env_kwargs.pop("render_arm", ENV_DEFAULTS["render_arm"])
-        )["render_arm"]
-        render_size = env_kwargs.pop("render_size", ENV_DEFAULTS["render_size"])
-        # Checked now, as the single env does, though only rendering uses it.
-        self._render_size = check_render_size(render_size)
         cls, defaults = _vector_env_class(env_id)
+        render_mode = env_kwargs.pop("render_mode", ENV_DEFAULTS["render_mode"])
+        renders = getattr(cls, "RENDERS", True)
+        check_choice("render_mode", render_mode, (None, "rgb_array") if renders else (None,))
+        self.render_arm = ENV_DEFAULTS["render_arm"]
+        self._render_size = ENV_DEFAULTS["render_size"]
+        if renders:
+            self.render_arm = check_keywords(
+                render_arm=env_kwargs.pop("render_arm", ENV_DEFAULTS["render_arm"])
+            )["render_arm"]
+            # Checked now, as the single env does, though only rendering uses it.
+            self._render_size = check_render_size(
+                env_kwargs.pop("render_size", ENV_DEFAULTS["render_size"])
+            )
         self.env_id = env_id
         self.venv = cls(num_envs=n_envs, copy=False, **{**defaults, **env_kwargs})
         v = self.venv
@@ -127,7 +136,7 @@ class SixAxisVecEnv(VecEnv):
         self._paths: list[list[tuple[int, int, int]]] | None = None
         super().__init__(v.num_envs, v.single_observation_space, v.single_action_space)
         self.metadata = {"render_modes": ["rgb_array"] if render_mode else [], "render_fps": 8}
-        self._index = v.obs_type == "index"
+        self._index = getattr(v, "obs_type", None) == "index"
         self._actions: np.ndarray | None = None
         if seed is not None:
             self.seed(seed)
@@ -168,26 +177,21 @@ class SixAxisVecEnv(VecEnv):
             return int(obs[i])
         return obs[i].copy()
 
-    @staticmethod
-    def _infos(info: dict[str, Any], idx: Sequence[int] | None = None) -> list[dict[str, Any]]:
+    def _infos(
+        self, info: dict[str, Any], idx: Sequence[int] | None = None
+    ) -> list[dict[str, Any]]:
         """The single env's info dicts of envs ``idx`` (all if None), from the vector env's
-        info (a dict of arrays)."""
+        info (a dict of arrays, the keys of its ``INFO_KEYS``; rows of 2-D arrays become
+        tuples, as the single env's ``cell``)."""
         idx = slice(None) if idx is None else list(idx)
-        collided = info["collided"][idx].tolist()
-        distance = info["distance_to_target"][idx].tolist()
-        cells = info["cell"][idx].tolist()
-        success = info["is_success"][idx].tolist()
-        detour = info["detour_penalty"][idx].tolist()
-        return [
-            {
-                "collided": collided[k],
-                "distance_to_target": distance[k],
-                "cell": tuple(cells[k]),
-                "is_success": success[k],
-                "detour_penalty": detour[k],
-            }
-            for k in range(len(collided))
-        ]
+        columns = {}
+        for key in self.venv.INFO_KEYS:
+            values = info[key][idx]
+            columns[key] = (
+                [tuple(r) for r in values.tolist()] if values.ndim == 2 else values.tolist()
+            )
+        n = len(next(iter(columns.values())))
+        return [{key: col[k] for key, col in columns.items()} for k in range(n)]
 
     # VecEnv API -------------------------------------------------------------------------
     def _reset_envs(self, mask: np.ndarray):
@@ -278,6 +282,8 @@ class SixAxisVecEnv(VecEnv):
             return int(self.venv.elapsed_steps[i])
         if name == "path" and self._paths is not None:
             return list(self._paths[i])
+        if name in getattr(self.venv, "SHARED_ATTRS", ()):
+            return getattr(self.venv, name)
         if name == "metadata":
             return self.metadata
         if name == "spec":
@@ -292,7 +298,14 @@ class SixAxisVecEnv(VecEnv):
         return [self._env_attr(attr_name, i) for i in self._get_indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices=None) -> None:
-        if attr_name in (*_SHARED_ATTRS, *_STATE_ATTRS, "observation_space", "action_space"):
+        shared = getattr(self.venv, "SHARED_ATTRS", ())
+        if attr_name in (
+            *_SHARED_ATTRS,
+            *shared,
+            *_STATE_ATTRS,
+            "observation_space",
+            "action_space",
+        ):
             raise invalid(
                 attr_name,
                 value,

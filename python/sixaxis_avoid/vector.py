@@ -25,7 +25,85 @@ from sixaxis_avoid.env import (
 )
 
 
-class SixAxisAvoidVectorEnv(VectorEnv):
+class NativeVectorEnv(VectorEnv):
+    """What the package's native vector envs share: a Rust batch (``self._core``) that steps
+    all envs in one call into NumPy buffers it owns, Gymnasium 1.x next-step autoreset, the
+    ``copy`` rule and ``reset(options={"reset_mask": mask})``. A subclass sets ``self._core``,
+    the buffers ``self._obs``, ``self._rewards``, ``self._terminated``, ``self._truncated``
+    and ``self.copy``, and gives :meth:`_info`, :meth:`actions_array`, :meth:`_seed` and
+    (goal-conditioned, ``_GOAL``) :meth:`_goal_dict`."""
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+        "render_modes": [],
+    }
+    #: Goal-conditioned: ``Dict`` observations.
+    _GOAL: ClassVar[bool] = False
+
+    @staticmethod
+    def _refuse_render_mode(render_mode: Any) -> None:
+        if render_mode is not None:
+            raise invalid(
+                "render_mode",
+                render_mode,
+                'the native vector env does not render; use vectorization_mode="sync" to render',
+            )
+
+    def _seed(self, seed: int | list[int | None] | None) -> None:
+        """Seed the envs' generators (none by default)."""
+
+    def _goal_dict(self, obs: np.ndarray) -> dict[str, np.ndarray]:
+        raise NotImplementedError
+
+    def _info(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def actions_array(self, actions) -> np.ndarray:
+        """``actions`` as the array the core steps with."""
+        raise NotImplementedError
+
+    def _result(self, arr: np.ndarray) -> np.ndarray:
+        return arr.copy() if self.copy else arr
+
+    def _observations(self):
+        obs = self._result(self._obs)
+        return self._goal_dict(obs) if self._GOAL else obs
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ):
+        super().reset(seed=seed if isinstance(seed, (int, np.integer)) else None)
+        self._seed(seed)
+        mask = None
+        if options and "reset_mask" in options:
+            mask = np.asarray(options["reset_mask"])
+            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
+                raise invalid(
+                    "options['reset_mask']",
+                    options["reset_mask"],
+                    f"must be a bool array of shape ({self.num_envs},)",
+                )
+        self._core.reset(mask)
+        return self._observations(), self._info()
+
+    def step(self, actions):
+        self._core.step(self.actions_array(actions))
+        return (
+            self._observations(),
+            self._result(self._rewards),
+            self._result(self._terminated),
+            self._result(self._truncated),
+            self._info(),
+        )
+
+    def render(self):
+        return None
+
+    def close_extras(self, **kwargs: Any) -> None:
+        pass
+
+
+class SixAxisAvoidVectorEnv(NativeVectorEnv):
     """``num_envs`` copies of :class:`~sixaxis_avoid.env.SixAxisAvoidEnv` in one Rust object.
 
     Made by ``gym.make_vec("SixAxisAvoid-v0", num_envs=N,
@@ -54,12 +132,14 @@ class SixAxisAvoidVectorEnv(VectorEnv):
     (``cell_of``, ``state_of``, ``goal_to_cell``) are public.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {
-        "autoreset_mode": AutoresetMode.NEXT_STEP,
-        "render_modes": [],
-    }
-    #: Goal-conditioned (``SixAxisAvoidGoalVectorEnv``).
-    _GOAL: ClassVar[bool] = False
+    #: The per-env info keys (the SB3 VecEnv's info dicts).
+    INFO_KEYS: ClassVar[tuple[str, ...]] = (
+        "collided",
+        "distance_to_target",
+        "cell",
+        "is_success",
+        "detour_penalty",
+    )
 
     def __init__(
         self,
@@ -86,12 +166,7 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         )
         num_envs, assist, reward_scale = kw["num_envs"], kw["assist"], kw["reward_scale"]
         random_target, arm_aware, self.copy = kw["random_target"], kw["arm_aware"], kw["copy"]
-        if render_mode is not None:
-            raise invalid(
-                "render_mode",
-                render_mode,
-                'the native vector env does not render; use vectorization_mode="sync" to render',
-            )
+        self._refuse_render_mode(render_mode)
         check_random_target(obs_type, random_target)
         self.scenario = as_scenario(scenario)
         if max_episode_steps is None:
@@ -146,12 +221,8 @@ class SixAxisAvoidVectorEnv(VectorEnv):
         self._core.seed([int(seeding.np_random(s)[0].integers(0, 2**63)) for s in seeds])
         self._seeded = True
 
-    def _result(self, arr: np.ndarray) -> np.ndarray:
-        return arr.copy() if self.copy else arr
-
-    def _observations(self):
-        obs = self._result(self._obs)
-        return goal_dict(obs) if self._GOAL else obs
+    def _goal_dict(self, obs: np.ndarray) -> dict[str, np.ndarray]:
+        return goal_dict(obs)
 
     def _info(self) -> dict[str, Any]:
         m = self._mask
@@ -168,23 +239,6 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             "_detour_penalty": m,
         }
 
-    def reset(
-        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
-    ):
-        super().reset(seed=seed if isinstance(seed, (int, np.integer)) else None)
-        self._seed(seed)
-        mask = None
-        if options and "reset_mask" in options:
-            mask = np.asarray(options["reset_mask"])
-            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
-                raise invalid(
-                    "options['reset_mask']",
-                    options["reset_mask"],
-                    f"must be a bool array of shape ({self.num_envs},)",
-                )
-        self._core.reset(mask)
-        return self._observations(), self._info()
-
     def actions_array(self, actions) -> np.ndarray:
         """``actions`` as the int64 array of shape ``(num_envs,)`` the core steps with."""
         a = np.asarray(actions)
@@ -197,22 +251,6 @@ class SixAxisAvoidVectorEnv(VectorEnv):
             if a.shape != (self.num_envs,):
                 raise invalid("actions", actions, f"must have shape ({self.num_envs},)")
         return a
-
-    def step(self, actions):
-        self._core.step(self.actions_array(actions))
-        return (
-            self._observations(),
-            self._result(self._rewards),
-            self._result(self._terminated),
-            self._result(self._truncated),
-            self._info(),
-        )
-
-    def render(self):
-        return None
-
-    def close_extras(self, **kwargs: Any) -> None:
-        pass
 
     # Configuration ----------------------------------------------------------------------
     @property

@@ -50,6 +50,7 @@ pub mod grid;
 pub mod host;
 pub mod ik;
 pub mod io;
+pub mod joint_env;
 pub mod kinematics;
 pub mod names;
 pub mod options;

@@ -11,6 +11,7 @@ mod convert;
 mod env_core;
 mod errors;
 mod export;
+mod joint_core;
 mod plan;
 mod planner;
 mod request;
@@ -57,6 +58,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<train::PyTrainResult>()?;
     m.add_class::<env_core::PyEnvCore>()?;
     m.add_class::<env_core::PyVecEnvCore>()?;
+    m.add_class::<joint_core::PyJointEnvCore>()?;
+    m.add_class::<joint_core::PyJointVecEnvCore>()?;
     m.add_function(wrap_pyfunction!(train::train, m)?)?;
     m.add_function(wrap_pyfunction!(request::options, m)?)?;
     m.add_function(wrap_pyfunction!(request::check_options, m)?)?;

@@ -6,8 +6,9 @@
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString};
-use sixaxis_core::env::{env_option_info, ENV_NULLABLE, ENV_OPTIONS};
+use sixaxis_core::env::{ENV_NULLABLE, ENV_OPTIONS};
 use sixaxis_core::generator::{generator_options, GeneratorOptions, GENERATOR_OPTIONS};
+use sixaxis_core::joint_env::{JOINT_ENV_OPTIONS, JOINT_NULLABLE};
 use sixaxis_core::options::{check_value, Domain, OptionInfo, OptionValue, Options};
 use sixaxis_core::request::{option_values, plan_options, train_options, TrainRequest};
 use sixaxis_core::Scenario;
@@ -253,8 +254,8 @@ pub fn options<'py>(
     Ok(out)
 }
 
-/// Check the keywords of a Gymnasium env (``function="env"``) against the core's table
-/// (``ENV_OPTIONS``) and return them as a dict of plain values (``bool``, ``int``,
+/// Check the keywords of a Gymnasium env (``function="env"``: the grid envs, the core's
+/// ``ENV_OPTIONS``; ``function="joint"``: the joint-space envs, ``JOINT_ENV_OPTIONS``) and return them as a dict of plain values (``bool``, ``int``,
 /// ``float``, ``str`` or ``None``): each bad value raises :class:`InvalidArgumentError`
 /// naming the keyword and its ``repr``; ``None`` is accepted only where the table allows
 /// it. An unknown keyword is a ``TypeError``.
@@ -265,22 +266,26 @@ pub fn check_options<'py>(
     function: &str,
     kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if function != "env" {
-        return Err(invalid_argument(
-            py,
-            "function",
-            function,
-            "must be \"env\"",
-        ));
-    }
+    let (table, nullable): (&[OptionInfo], &[&str]) = match function {
+        "env" => (&ENV_OPTIONS, ENV_NULLABLE),
+        "joint" => (&JOINT_ENV_OPTIONS, JOINT_NULLABLE),
+        other => {
+            return Err(invalid_argument(
+                py,
+                "function",
+                other,
+                "must be \"env\" or \"joint\"",
+            ))
+        }
+    };
     let out = PyDict::new(py);
     let Some(kwargs) = kwargs else {
         return Ok(out);
     };
     for (k, v) in kwargs.iter() {
         let key: String = k.extract()?;
-        let Some(info) = env_option_info(&key) else {
-            let keys: Vec<&str> = ENV_OPTIONS.iter().map(|i| i.key).collect();
+        let Some(info) = table.iter().find(|i| i.key == key) else {
+            let keys: Vec<&str> = table.iter().map(|i| i.key).collect();
             return Err(PyTypeError::new_err(format!(
                 "got an unexpected keyword argument '{key}' (the env's keywords: {})",
                 keys.join(", ")
@@ -292,7 +297,7 @@ pub fn check_options<'py>(
         };
         let bad = || invalid_argument(py, &key, repr(&v), reason.clone());
         if v.is_none() {
-            if ENV_NULLABLE.contains(&key.as_str()) {
+            if nullable.contains(&key.as_str()) {
                 out.set_item(&key, py.None())?;
                 continue;
             }

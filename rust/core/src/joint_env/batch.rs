@@ -1,0 +1,193 @@
+//! N joint-space episodes stepped together ([`JointBatch`]) with next-step autoreset and a
+//! step cap, into caller-provided buffers ([`JointBuffers`]); the conventions of
+//! [`crate::env::BatchEnv`].
+
+use std::sync::Arc;
+
+use super::{JointEpisode, JointModel, JOINT_ENV_OPTIONS};
+use crate::error::{Error, Result};
+use crate::options::{check_value, OptionValue};
+
+/// Caller-provided output buffers of a batch step or reset (`n` lanes; row-major).
+#[derive(Debug)]
+pub struct JointBuffers<'a> {
+    /// Observations, `n * obs_dim` float32.
+    pub obs: &'a mut [f32],
+    /// Rewards, `n`.
+    pub rewards: &'a mut [f64],
+    /// The lane reached its target, `n`.
+    pub terminated: &'a mut [bool],
+    /// The lane hit the step cap, `n`.
+    pub truncated: &'a mut [bool],
+    /// The step was refused, `n`.
+    pub refused: &'a mut [bool],
+    /// Terminal-target distance, mm, `n`.
+    pub distance_mm: &'a mut [f64],
+    /// Smallest link capsule gap, mm, `n` (`INFINITY` without obstacles).
+    pub clearance_mm: &'a mut [f64],
+    /// Eq. 9's part of the reward (<= 0, before `reward_scale`; 0 after a reset), `n`.
+    pub detour_penalty: &'a mut [f64],
+    /// Joint angles, radians, `6 n`.
+    pub joints: &'a mut [f64],
+    /// Terminal position, mm, `3 n`.
+    pub terminal_mm: &'a mut [f64],
+    /// The achieved goal before the step (float32, as the observation), `3 n`.
+    pub previous_goal: &'a mut [f32],
+}
+
+/// N joint-space envs stepped together, with next-step autoreset and a step cap
+/// (`max_episode_steps` of the model's options).
+#[derive(Debug)]
+pub struct JointBatch {
+    model: Arc<JointModel>,
+    episodes: Vec<JointEpisode>,
+    needs_reset: Vec<bool>,
+}
+
+impl JointBatch {
+    /// `n` envs of `model` (`n` in `num_envs`' domain of [`JOINT_ENV_OPTIONS`]).
+    pub fn new(model: Arc<JointModel>, n: usize) -> Result<JointBatch> {
+        let info = JOINT_ENV_OPTIONS
+            .iter()
+            .find(|i| i.key == "num_envs")
+            .expect("in the table");
+        check_value("num_envs", &info.domain, &OptionValue::Int(n as i128))?;
+        let ep = JointEpisode::new(&model);
+        Ok(JointBatch {
+            episodes: vec![ep; n],
+            needs_reset: vec![true; n],
+            model,
+        })
+    }
+
+    /// Number of envs.
+    pub fn len(&self) -> usize {
+        self.episodes.len()
+    }
+
+    /// Always false (a batch has at least one env).
+    pub fn is_empty(&self) -> bool {
+        self.episodes.is_empty()
+    }
+
+    /// The shared model.
+    pub fn model(&self) -> &Arc<JointModel> {
+        &self.model
+    }
+
+    /// The episodes.
+    pub fn episodes(&self) -> &[JointEpisode] {
+        &self.episodes
+    }
+
+    fn check(&self, b: &JointBuffers<'_>) -> Result<()> {
+        let n = self.len();
+        let d = self.model.obs_dim();
+        let lengths = [
+            ("obs", b.obs.len(), n * d),
+            ("rewards", b.rewards.len(), n),
+            ("terminated", b.terminated.len(), n),
+            ("truncated", b.truncated.len(), n),
+            ("refused", b.refused.len(), n),
+            ("distance_mm", b.distance_mm.len(), n),
+            ("clearance_mm", b.clearance_mm.len(), n),
+            ("detour_penalty", b.detour_penalty.len(), n),
+            ("joints", b.joints.len(), 6 * n),
+            ("terminal_mm", b.terminal_mm.len(), 3 * n),
+            ("previous_goal", b.previous_goal.len(), 3 * n),
+        ];
+        for (name, len, want) in lengths {
+            if len != want {
+                return Err(Error::argument(
+                    name,
+                    format!("{len} values"),
+                    format!("the buffer must hold {want} ({n} envs)"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn write(&self, i: usize, b: &mut JointBuffers<'_>) {
+        let ep = &self.episodes[i];
+        let m = &*self.model;
+        let d = m.obs_dim();
+        ep.write_obs(m, &mut b.obs[i * d..(i + 1) * d]);
+        b.refused[i] = ep.refused();
+        b.distance_mm[i] = ep.distance_to_target_mm(m);
+        b.clearance_mm[i] = ep.clearance_mm(m);
+        b.joints[6 * i..6 * i + 6].copy_from_slice(&ep.joints_rad());
+        let t = ep.terminal_mm();
+        b.terminal_mm[3 * i..3 * i + 3].copy_from_slice(&[t.x, t.y, t.z]);
+        b.previous_goal[3 * i..3 * i + 3].copy_from_slice(&ep.previous_goal());
+    }
+
+    fn reset_one(&mut self, i: usize, b: &mut JointBuffers<'_>) {
+        self.episodes[i].reset(&self.model);
+        self.needs_reset[i] = false;
+        b.rewards[i] = 0.0;
+        b.terminated[i] = false;
+        b.truncated[i] = false;
+        b.detour_penalty[i] = 0.0;
+        self.write(i, b);
+    }
+
+    /// Reset the lanes where `mask` is true (all if `None`) and write their entries; the
+    /// other lanes' entries are left as they were.
+    pub fn reset(&mut self, mask: Option<&[bool]>, mut b: JointBuffers<'_>) -> Result<()> {
+        self.check(&b)?;
+        if let Some(m) = mask {
+            if m.len() != self.len() {
+                return Err(Error::argument(
+                    "reset_mask",
+                    format!("{} entries", m.len()),
+                    format!("expected one per env ({})", self.len()),
+                ));
+            }
+        }
+        for i in 0..self.len() {
+            if mask.is_none_or(|m| m[i]) {
+                self.reset_one(i, &mut b);
+            }
+        }
+        Ok(())
+    }
+
+    /// Step every lane with its action (`actions`: `6 n` numbers, row-major, each in
+    /// [-1, 1]; all checked before any lane moves). Lanes whose episode ended at the
+    /// previous step are reset instead (next-step autoreset; their action is ignored).
+    pub fn step(&mut self, actions: &[f64], mut b: JointBuffers<'_>) -> Result<()> {
+        self.check(&b)?;
+        let n = self.len();
+        if actions.len() != 6 * n {
+            return Err(Error::argument(
+                "actions",
+                format!("{} values", actions.len()),
+                format!("expected 6 per env ({n} envs, {})", 6 * n),
+            ));
+        }
+        for i in 0..n {
+            JointModel::check_action(&format!("actions[{i}]"), &actions[6 * i..6 * i + 6])?;
+        }
+        let model = Arc::clone(&self.model);
+        let cap = model.options().max_episode_steps;
+        for i in 0..n {
+            if self.needs_reset[i] {
+                self.reset_one(i, &mut b);
+                continue;
+            }
+            let a: [f64; 6] = std::array::from_fn(|k| actions[6 * i + k]);
+            let ep = &mut self.episodes[i];
+            let out = ep.step_unchecked(&model, &a);
+            let truncated = !out.reached && ep.steps() >= cap;
+            b.rewards[i] = out.reward;
+            b.terminated[i] = out.reached;
+            b.truncated[i] = truncated;
+            b.detour_penalty[i] = out.detour_penalty;
+            self.needs_reset[i] = out.reached || truncated;
+            self.write(i, &mut b);
+        }
+        Ok(())
+    }
+}
