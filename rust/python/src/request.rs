@@ -266,8 +266,12 @@ pub fn check_options<'py>(
     function: &str,
     kwargs: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let env_infos: Vec<OptionInfo>;
     let (table, nullable): (&[OptionInfo], &[&str]) = match function {
-        "env" => (&ENV_OPTIONS, ENV_NULLABLE),
+        "env" => {
+            env_infos = ENV_OPTIONS.iter().map(|o| o.info).collect();
+            (&env_infos, ENV_NULLABLE)
+        }
         "joint" => (&JOINT_ENV_OPTIONS, JOINT_NULLABLE),
         other => {
             return Err(invalid_argument(
