@@ -15,4 +15,7 @@ echo "== stubtest";     python -m mypy.stubtest sixaxis_avoid._core
 echo "== options";      python scripts/derive_options.py --check
 echo "== cargo test";   cargo test --workspace --release
 # Slow learning runs (marker `slow`) are left out here; scripts/test_slow.sh runs them.
-echo "== pytest";       python -m pytest tests -q -m "not slow"
+echo "== pytest";       python -m pytest tests -q -m "not slow" --ignore=tests/test_remote_ray.py
+# Ray's driver state is per process: the two-node cluster test gets a process of its own,
+# not one where the benchmark tests already started and stopped a local Ray.
+echo "== pytest (Ray cluster)"; python -m pytest tests/test_remote_ray.py -q
