@@ -62,6 +62,21 @@ def goal_to_cell(core: Any, goal: Any) -> np.ndarray:
     return core.goal_to_cell(g.reshape(-1, 3)).reshape(g.shape)
 
 
+def goal_pair(achieved_goal: Any, desired_goal: Any) -> tuple[np.ndarray, np.ndarray, tuple, int]:
+    """The (achieved, desired) goals of a ``compute_reward`` call, checked to be float arrays
+    of one shape ``(..., 3)``, with that leading shape and its number of goal pairs."""
+    a = _goals("achieved_goal", achieved_goal)
+    d = _goals("desired_goal", desired_goal)
+    if d.shape != a.shape:
+        raise invalid(
+            "desired_goal",
+            f"array of shape {d.shape}",
+            f"must have the shape of achieved_goal {a.shape}",
+        )
+    shape = a.shape[:-1]
+    return a, d, shape, int(np.prod(shape, dtype=np.int64))
+
+
 class GoalRewards:
     """``compute_reward`` of a goal env over its core (``EnvCore`` or ``VecEnvCore``)."""
 
@@ -70,16 +85,7 @@ class GoalRewards:
         self._warned = False
 
     def __call__(self, achieved_goal: Any, desired_goal: Any, info: Any) -> np.ndarray | float:
-        a = _goals("achieved_goal", achieved_goal)
-        d = _goals("desired_goal", desired_goal)
-        if d.shape != a.shape:
-            raise invalid(
-                "desired_goal",
-                f"array of shape {d.shape}",
-                f"must have the shape of achieved_goal {a.shape}",
-            )
-        shape = a.shape[:-1]
-        n = int(np.prod(shape, dtype=np.int64))
+        a, d, shape, n = goal_pair(achieved_goal, desired_goal)
         collided, detour = self._info_arrays(info, shape, n)
         r = self._core.compute_reward(a.reshape(-1, 3), d.reshape(-1, 3), collided, detour)
         return float(r[0]) if shape == () else r.reshape(shape)

@@ -15,7 +15,7 @@ from gymnasium.vector.utils import batch_space
 
 from sixaxis_avoid import _core
 from sixaxis_avoid._checks import invalid
-from sixaxis_avoid._goal import _goals
+from sixaxis_avoid._goal import goal_pair
 from sixaxis_avoid._ids import JOINT_ENV_ID, JOINT_GOAL_ENV_ID
 from sixaxis_avoid.env import as_scenario
 from sixaxis_avoid.vector import NativeVectorEnv
@@ -82,16 +82,7 @@ class JointGoalRewards:
         self._warned = False
 
     def __call__(self, achieved_goal: Any, desired_goal: Any, info: Any) -> np.ndarray | float:
-        a = _goals("achieved_goal", achieved_goal)
-        d = _goals("desired_goal", desired_goal)
-        if d.shape != a.shape:
-            raise invalid(
-                "desired_goal",
-                f"array of shape {d.shape}",
-                f"must have the shape of achieved_goal {a.shape}",
-            )
-        shape = a.shape[:-1]
-        n = int(np.prod(shape, dtype=np.int64))
+        a, d, shape, n = goal_pair(achieved_goal, desired_goal)
         a32 = a.reshape(-1, 3).astype(np.float32)
         previous, refused, detour = self._info_arrays(info, shape, n, a32)
         r = self._core.compute_reward(
