@@ -1,0 +1,330 @@
+"""JAX learners against SB3 with identical hyperparameters: do the two implementations agree?
+
+    taskset -c 0 python -m sixaxis_avoid.benchmark.agreement --algo ppo \\
+        --tasks paper_simple,gen-easy-0,gen-medium-0 --seeds 5 --total-timesteps 30000 \\
+        --out docs/results/agreement/ppo-30000.json
+
+For each task, rejax's PPO on the JAX twin (``sixaxis_avoid.benchmark.jax_learners``, all
+seeds in one vmapped call) and the benchmark's own SB3 PPO learner
+(``sixaxis_avoid.benchmark.learners.PPO`` on ``SixAxisAvoid-v0``, one seed after the other,
+one torch thread) train with the same values (the ``jax_learners`` flags, mapped to SB3's
+names by :func:`sb3_values`) for the same env steps, and both score their greedy policy on
+the task's evaluation targets at the same env-step points. The score is the benchmark's
+(SPL of the greedy path, 0 if it misses the target).
+
+Agreement, per task (docs/BENCHMARKS.md, *JAX and SB3 agree*): the 95% percentile-bootstrap
+intervals over seeds of the two implementations' final scores overlap, and so do those of
+their area under the curve (the mean score over the evaluation points); a two-sided
+permutation test of the final scores is recorded too. With 5 seeds and near-binary outcomes
+these intervals are wide: agreement says the two are not told apart at this sample size,
+disagreement that they differ. Every knob is a flag; the JSON output keeps each seed's curve.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sixaxis_avoid.benchmark._io import atomic_write_text
+
+#: Bootstrap replications and the seed of the resampling.
+REPS = 2000
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--algo", choices=("ppo",), default="ppo")
+    p.add_argument("--suite", default="v1")
+    p.add_argument("--tasks", default="paper_simple,gen-easy-0,gen-medium-0")
+    p.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 for both")
+    p.add_argument("--total-timesteps", type=int, default=30_000, help="env steps per seed")
+    p.add_argument("--eval-freq", type=int, default=2_560, help="env steps between evaluations")
+    p.add_argument(
+        "--jax-flag",
+        action="append",
+        default=[],
+        metavar="--NAME=VALUE",
+        help="extra jax_learners flag (repeatable), e.g. --jax-flag=--learning-rate=1e-3",
+    )
+    p.add_argument("--skip-sb3", action="store_true", help="JAX side only (a smoke run)")
+    p.add_argument("--out", type=Path, default=None, help="JSON file")
+    p.add_argument(
+        "--from-json",
+        type=Path,
+        action="append",
+        default=[],
+        help="do not train: read this result file (repeatable) and write --markdown",
+    )
+    p.add_argument(
+        "--markdown",
+        type=Path,
+        default=None,
+        help="write the section 'jax-sb3-agreement' of this page (e.g. docs/BENCHMARKS.md)",
+    )
+    return p.parse_args(argv)
+
+
+def jax_args(a: argparse.Namespace, task: str) -> argparse.Namespace:
+    from sixaxis_avoid.benchmark import jax_learners
+
+    return jax_learners.parse_args(
+        [
+            "--algo", a.algo, "--suite", a.suite, "--task", task, "--seeds", str(a.seeds),
+            "--total-timesteps", str(a.total_timesteps), "--eval-freq", str(a.eval_freq),
+            *a.jax_flag,
+        ]
+    )  # fmt: skip
+
+
+def sb3_values(j: argparse.Namespace) -> dict[str, Any]:
+    """The benchmark's SB3 PPO hyperparameters (its names) with the JAX run's values."""
+    if j.activation != "tanh":  # SB3's MlpPolicy default, which the learner does not change
+        raise ValueError(f"--activation: {j.activation!r}; the SB3 learner uses tanh")
+    return {
+        "reward_scale": j.reward_scale,
+        "assist": bool(j.assist),
+        "max_episode_steps": j.max_episode_steps,
+        "n_envs": j.num_envs,
+        "n_steps": j.num_steps,
+        "batch_size": j.num_envs * j.num_steps // j.num_minibatches,
+        "n_epochs": j.num_epochs,
+        "learning_rate": j.learning_rate,
+        "gamma": j.gamma,
+        "gae_lambda": j.gae_lambda,
+        "clip_range": j.clip_eps,
+        "ent_coef": j.ent_coef,
+        "vf_coef": j.vf_coef,
+        "max_grad_norm": j.max_grad_norm,
+        "net_arch": [int(h) for h in j.hidden.split(",")],
+    }
+
+
+def sb3_curve(task: Any, seed: int, values: dict[str, Any], budget: int, points: list[int]):
+    """One SB3 run's scores at ``points`` (env steps) and its wall time."""
+    from sixaxis_avoid.benchmark.learners import RunContext, resolve
+
+    learner = resolve("ppo")(values)
+    ctx = RunContext(task, seed, budget, learner.hyperparams, points, learner)
+    t0 = time.perf_counter()
+    learner.learn(ctx)
+    ctx.finish()
+    wall = time.perf_counter() - t0
+    return [(p["env_steps"], p["score"]) for p in ctx.points], wall
+
+
+def on_points(curve: list[tuple[int, float]], points: list[int]) -> list[float]:
+    """The score recorded at each point: a checkpoint fires at the first env step at or past
+    its point (SB3 steps ``n_envs`` env steps at a time), so the first record at or past it."""
+    out = []
+    for q in points:
+        at = [s for e, s in curve if e >= q]
+        if not at:
+            raise RuntimeError(f"no SB3 evaluation at or after env step {q}")
+        out.append(at[0])
+    return out
+
+
+def bootstrap_ci(x: np.ndarray, rng: np.random.Generator) -> list[float]:
+    idx = rng.integers(0, len(x), size=(REPS, len(x)))
+    means = x[idx].mean(axis=1)
+    return [float(np.quantile(means, 0.025)), float(np.quantile(means, 0.975))]
+
+
+def permutation_p(a: np.ndarray, b: np.ndarray, rng: np.random.Generator) -> float:
+    """Two-sided permutation test of the difference of means (exact when small)."""
+    from itertools import combinations
+
+    pooled = np.concatenate([a, b])
+    obs = abs(a.mean() - b.mean())
+    n = len(pooled)
+    if n <= 16:
+        splits = list(combinations(range(n), len(a)))
+        hits = 0
+        for s in splits:
+            mask = np.zeros(n, bool)
+            mask[list(s)] = True
+            hits += abs(pooled[mask].mean() - pooled[~mask].mean()) >= obs - 1e-12
+        return hits / len(splits)
+    hits = 0
+    for _ in range(REPS):
+        perm = rng.permutation(pooled)
+        hits += abs(perm[: len(a)].mean() - perm[len(a) :].mean()) >= obs - 1e-12
+    return (hits + 1) / (REPS + 1)
+
+
+def summarise(jax_s: np.ndarray, sb3_s: np.ndarray, seed: int = 0) -> dict[str, Any]:
+    """Scores are (seeds, points). Final score and area under the curve, per side, with
+    intervals; whether they overlap."""
+    rng = np.random.default_rng(seed)
+    out: dict[str, Any] = {}
+    for name, f in (("final", lambda s: s[:, -1]), ("auc", lambda s: s.mean(axis=1))):
+        ja, sa_ = f(jax_s), f(sb3_s)
+        jc, sc = bootstrap_ci(ja, rng), bootstrap_ci(sa_, rng)
+        out[name] = {
+            "jax": {"mean": float(ja.mean()), "ci": jc},
+            "sb3": {"mean": float(sa_.mean()), "ci": sc},
+            "overlap": bool(jc[0] <= sc[1] and sc[0] <= jc[1]),
+        }
+    out["final"]["permutation_p"] = permutation_p(jax_s[:, -1], sb3_s[:, -1], rng)
+    out["agree"] = bool(out["final"]["overlap"] and out["auc"]["overlap"])
+    return out
+
+
+#: Where rejax's PPO (0.1.3) and SB3's (2.x) differ with the same values, read in their
+#: sources; the section lists them so that a disagreement can be traced.
+PPO_DIFFERENCES = (
+    "value loss: rejax clips the value prediction to ±clip_eps around the rollout's value "
+    "(CleanRL's form); SB3 does not clip it (`clip_range_vf=None`)",
+    "optimiser: rejax has one Adam per network (actor, critic), each with its own gradient-norm "
+    "clip; SB3 one Adam over the summed loss, clipped once; Adam's eps is 1e-8 in optax, "
+    "1e-5 in SB3's PPO",
+    "initialisation: flax's default (LeCun normal) in rejax; SB3's orthogonal (gains √2, 0.01 "
+    "for the policy head, 1 for the value head)",
+    "truncation: rejax treats a truncated episode as terminal (no bootstrap); SB3 bootstraps "
+    "from the value of the last observation",
+)
+
+
+def markdown(results: list[dict[str, Any]]) -> str:
+    """The section: per algorithm and task, both implementations' final score and area under
+    the curve with intervals, and whether they agree."""
+    lines = [
+        "## JAX and SB3 agree",
+        "",
+        "Generated by `python -m sixaxis_avoid.benchmark.agreement` (module docstring: the "
+        "protocol); commands below. rejax on the JAX twin and the benchmark's SB3 learner "
+        "train with the same values for the same env steps and are scored the same way "
+        "(greedy SPL on the task's evaluation targets) at the same env-step points. "
+        "*Agree*: the 95% bootstrap intervals over seeds overlap for the final score and for "
+        "the area under the curve (AUC, the mean score over the points).",
+        "",
+        "| algo | task | env steps | seeds | final JAX | final SB3 | AUC JAX | AUC SB3 "
+        "| permutation p | agree |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    commands = []
+    for r in results:
+        f = r["flags"]
+        commands.append(
+            "python -m sixaxis_avoid.benchmark.agreement "
+            + " ".join(
+                f"--{k.replace('_', '-')} {f[k]}"
+                for k in ("algo", "suite", "tasks", "seeds", "total_timesteps", "eval_freq")
+            )
+            + "".join(f" --jax-flag={x}" for x in f["jax_flag"])
+            + (f" --out {f['out']}" if f.get("out") else "")
+        )
+        for tid, e in r["tasks"].items():
+            if "agreement" not in e:
+                continue
+            g = e["agreement"]
+
+            def cell(x: dict[str, Any]) -> str:
+                return f"{x['mean']:.2f} [{x['ci'][0]:.2f}, {x['ci'][1]:.2f}]"
+
+            lines.append(
+                f"| {f['algo']} | {tid} | {int(f['total_timesteps']):,} "
+                f"| {len(e['jax']['spl'])} | {cell(g['final']['jax'])} "
+                f"| {cell(g['final']['sb3'])} | {cell(g['auc']['jax'])} "
+                f"| {cell(g['auc']['sb3'])} | {g['final']['permutation_p']:.2f} "
+                f"| {'yes' if g['agree'] else '**no**'} |"
+            )
+        speeds = [
+            (e["jax"]["env_steps_per_s"], e["sb3"]["env_steps_per_s"])
+            for e in r["tasks"].values()
+            if "sb3" in e
+        ]
+        if speeds:
+            lines.append("")
+            lines.append(
+                f"{f['algo']}: JAX {np.mean([s[0] for s in speeds]):,.0f} env steps/s (all "
+                f"seeds in one vmapped call, compile excluded) against SB3 "
+                f"{np.mean([s[1] for s in speeds]):,.0f} (one seed at a time, one torch "
+                f"thread), on {r.get('machine', '?')}, mean over the tasks."
+            )
+    lines += ["", "Where the two PPOs differ with the same values (read in their sources):", ""]
+    lines += [f"- {d}." for d in PPO_DIFFERENCES]
+    lines += ["", "```bash", *commands, "```"]
+    return "\n".join(lines)
+
+
+def write_section(page: Path, text: str, name: str = "jax-sb3-agreement") -> None:
+    """Replace (or append) section ``name`` of ``page``, atomically."""
+    begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
+    body = page.read_text() if page.exists() else ""
+    section = f"{begin}\n{text.strip()}\n{end}"
+    if begin in body and end in body:
+        body = body[: body.index(begin)] + section + body[body.index(end) + len(end) :]
+    else:
+        body = body.rstrip("\n") + ("\n\n" if body.strip() else "") + section + "\n"
+    atomic_write_text(page, body)
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    from sixaxis_avoid.benchmark import jax_learners
+    from sixaxis_avoid.benchmark.runner import machine, pin_numerics
+    from sixaxis_avoid.benchmark.tasks import load_suite
+
+    pin_numerics()
+    a = parse_args(argv)
+    if a.from_json:
+        results = [json.loads(p.read_text()) for p in a.from_json]
+        if a.markdown is not None:
+            write_section(a.markdown, markdown(results))
+        return {"results": len(results)}
+    suite = load_suite(a.suite)
+    flags = {k: (None if v is None else str(v)) if k in ("out", "markdown") else v
+             for k, v in vars(a).items() if k != "from_json"}  # fmt: skip
+    out: dict[str, Any] = {"flags": flags, "tasks": {}}
+    out["machine"] = machine()
+    for tid in a.tasks.split(","):
+        task = suite.task(tid)
+        j = jax_args(a, tid)
+        jr = jax_learners.run(j)
+        # Evaluations after training began (rejax's first is at env step 0).
+        keep = [i for i, e in enumerate(jr["eval_env_steps"]) if e > 0]
+        points = [int(jr["eval_env_steps"][i]) for i in keep]
+        jax_s = np.asarray(jr["spl"], dtype=np.float64)[:, keep]
+        entry: dict[str, Any] = {
+            "eval_env_steps": points,
+            "jax": {
+                "spl": jax_s.tolist(),
+                "train_wall_s": jr["train_wall_s"],
+                "compile_s": jr["compile_s"],
+                "env_steps_per_s": jr["env_steps_per_s"],
+                "rejax_config": jr["rejax_config"],
+            },
+        }
+        if not a.skip_sb3:
+            values = sb3_values(j)
+            rows, walls = [], []
+            for seed in jr["seeds"]:
+                curve, wall = sb3_curve(task, seed, values, a.total_timesteps, points)
+                rows.append(on_points(curve, points))
+                walls.append(wall)
+            sb3_s = np.asarray(rows, dtype=np.float64)
+            entry["sb3"] = {
+                "spl": sb3_s.tolist(),
+                "values": values,
+                "train_wall_s": float(sum(walls)),
+                "env_steps_per_s": len(walls) * a.total_timesteps / sum(walls),
+            }
+            entry["agreement"] = summarise(jax_s, sb3_s)
+        out["tasks"][tid] = entry
+        print(json.dumps({tid: entry.get("agreement")}), flush=True)
+    text = json.dumps(out, indent=1)
+    if a.out is not None:
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(a.out, text + "\n")
+    if a.markdown is not None:
+        write_section(a.markdown, markdown([out]))
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,77 @@
+"""The JAX-vs-SB3 agreement study's statistics and its mapping of hyperparameters."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("optuna")  # the benchmark extra, as the other benchmark tests
+
+from sixaxis_avoid.benchmark import agreement
+
+
+def test_identical_samples_agree_and_disjoint_ones_do_not():
+    same = np.array([[0.0, 1.0], [0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 1.0]])
+    r = agreement.summarise(same, same.copy())
+    assert r["agree"] and r["final"]["overlap"] and r["auc"]["overlap"]
+    assert r["final"]["permutation_p"] == pytest.approx(1.0)
+    lo = np.zeros((5, 3))
+    hi = np.ones((5, 3))
+    r = agreement.summarise(lo, hi)
+    assert not r["agree"]
+    assert r["final"]["jax"]["ci"] == [0.0, 0.0] and r["final"]["sb3"]["ci"] == [1.0, 1.0]
+    # 5 vs 5 with all ones against all zeros: 2 of the 252 splits are as extreme.
+    assert r["final"]["permutation_p"] == pytest.approx(2 / 252)
+
+
+def test_on_points_takes_the_first_evaluation_at_or_past_each_point():
+    curve = [(2560, 0.0), (5120, 0.5), (7680, 1.0)]
+    assert agreement.on_points(curve, [2560, 5120, 7680]) == [0.0, 0.5, 1.0]
+    assert agreement.on_points([(2564, 0.2), (5128, 0.4)], [2560, 5120]) == [0.2, 0.4]
+    with pytest.raises(RuntimeError, match="7680"):
+        agreement.on_points(curve[:2], [7680])
+
+
+def test_sb3_values_carry_every_jax_value_under_sb3_names():
+    j = agreement.jax_args(agreement.parse_args(["--tasks", "paper_simple"]), "paper_simple")
+    v = agreement.sb3_values(j)
+    assert v["batch_size"] == j.num_envs * j.num_steps // j.num_minibatches
+    assert v["clip_range"] == j.clip_eps and v["n_envs"] == j.num_envs
+    assert v["learning_rate"] == j.learning_rate and v["ent_coef"] == j.ent_coef
+    assert v["net_arch"] == [int(h) for h in j.hidden.split(",")]
+    j.activation = "relu"
+    with pytest.raises(ValueError, match="activation"):
+        agreement.sb3_values(j)
+
+
+def test_the_section_is_written_from_the_result_files_and_keeps_the_page(tmp_path):
+    flags = vars(agreement.parse_args(["--tasks", "t1", "--seeds", "2"])) | {"out": "x.json"}
+    flags.pop("from_json")
+    flags["markdown"] = None
+    jax_s = np.array([[0.0, 1.0], [0.0, 0.0]])
+    sb3_s = np.array([[1.0, 1.0], [1.0, 1.0]])
+    result = {
+        "flags": flags,
+        "machine": "test cpu",
+        "tasks": {
+            "t1": {
+                "jax": {"spl": jax_s.tolist(), "env_steps_per_s": 1000.0},
+                "sb3": {"spl": sb3_s.tolist(), "env_steps_per_s": 100.0},
+                "agreement": agreement.summarise(jax_s, sb3_s),
+            }
+        },
+    }
+    src = tmp_path / "r.json"
+    src.write_text(__import__("json").dumps(result))
+    page = tmp_path / "page.md"
+    page.write_text("# Page\n\nkept text\n")
+    agreement.main(["--from-json", str(src), "--markdown", str(page)])
+    body = page.read_text()
+    assert body.startswith("# Page\n\nkept text\n")
+    row = next(line for line in body.splitlines() if line.startswith("| ppo | t1 |"))
+    assert "| 0.50 [0.00, 1.00] | 1.00 [1.00, 1.00] |" in row and row.endswith("| **no** |")
+    assert "--tasks t1 --seeds 2" in body and "--out x.json" in body
+    assert "JAX 1,000 env steps/s" in body and "SB3 100" in body
+    # Re-writing replaces the section rather than appending a second one.
+    agreement.main(["--from-json", str(src), "--markdown", str(page)])
+    assert page.read_text().count("jax-sb3-agreement:begin") == 1
