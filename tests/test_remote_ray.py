@@ -1,5 +1,6 @@
-"""start_ray_servers on a two-node Ray cluster started on loopback (docs/SERVER.md "Across
-machines (Ray)"): one server per node, pinned there, driven by one RemoteVectorEnv.
+"""A two-node Ray cluster started on loopback: start_ray_servers (docs/SERVER.md "Across
+machines (Ray)": one server per node, pinned there, driven by one RemoteVectorEnv), and the
+benchmark's quick suite run on it from another driver (docs/BENCHMARKS.md, *How to run*).
 
 The cluster is two `ray start` nodes with their own temp dirs; cleanup ends exactly the
 processes of those two nodes (found by their temp dirs and port, then their children), never
@@ -94,7 +95,7 @@ def two_node_cluster():
         deadline = time.monotonic() + 60
         while len([n for n in ray.nodes() if n["Alive"]]) < 2 and time.monotonic() < deadline:
             time.sleep(0.5)
-        yield
+        yield f"127.0.0.1:{port}"
     finally:
         if ray.is_initialized():
             ray.shutdown()
@@ -140,3 +141,32 @@ def test_a_given_token_is_used(two_node_cluster):
         with RemoteVectorEnv(servers, 2, token=servers.token) as remote:
             remote.reset(seed=0)
             remote.step(np.array([0, 1]))
+
+
+def test_the_benchmark_quick_suite_runs_on_both_nodes(two_node_cluster, tmp_path):
+    """``benchmark run --address`` from a driver of its own, as a user joins a cluster: every
+    run lands, the runs are spread over both nodes, each file records its machine, and a
+    run's result equals the same spec run here, outside Ray."""
+    from sixaxis_avoid.benchmark.runner import execute_run, load_runs
+
+    out = tmp_path / "quick"
+    learners = "q_assist,bfs,ppo"
+    subprocess.run(
+        [sys.executable, "-m", "sixaxis_avoid.benchmark", "run", "--suite", "quick",
+         "--learners", learners, "--address", two_node_cluster, "--out-dir", str(out),
+         "--no-progress"],
+        env=ENV, check=True, capture_output=True, timeout=900,
+    )  # fmt: skip
+    runs = load_runs(out)
+    want = {(lr, t, s) for lr in learners.split(",") for t in
+            ("paper_simple", "gen-easy-0", "goal-paper_simple") for s in (0, 1)}  # fmt: skip
+    got = {(r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]) for r in runs}
+    assert got == want
+    alive = {n["NodeID"] for n in ray.nodes() if n["Alive"]}
+    where = {r["host"]["ray_node"] for r in runs}
+    assert where == alive and len(where) == 2
+    assert all(r["host"]["machine"] for r in runs)
+    one = next(r for r in runs if r["spec"]["learner"] == "q_assist")
+    here = execute_run(one["spec"])
+    assert here["result"]["curve"] == one["result"]["curve"]
+    assert here["result"]["paths"] == one["result"]["paths"]
