@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -245,7 +246,13 @@ def markdown(results: list[dict[str, Any]]) -> str:
                 f"{f['algo']}: JAX {np.mean([s[0] for s in speeds]):,.0f} env steps/s (all "
                 f"seeds in one vmapped call, compile excluded) against SB3 "
                 f"{np.mean([s[1] for s in speeds]):,.0f} (one seed at a time, one torch "
-                f"thread), on {r.get('machine', '?')}, mean over the tasks."
+                f"thread), on {r.get('machine', '?')}, mean over the tasks"
+                + (
+                    f"; load average at the end {r['load_average'][0]:.1f} (other work "
+                    "shared the cores: lower bounds)."
+                    if r.get("load_average")
+                    else "."
+                )
             )
     lines += ["", "Where the two PPOs differ with the same values (read in their sources):", ""]
     lines += [f"- {d}." for d in PPO_DIFFERENCES]
@@ -317,6 +324,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             entry["agreement"] = summarise(jax_s, sb3_s)
         out["tasks"][tid] = entry
         print(json.dumps({tid: entry.get("agreement")}), flush=True)
+    out["load_average"] = list(os.getloadavg())  # speeds under load are lower bounds
     text = json.dumps(out, indent=1)
     if a.out is not None:
         a.out.parent.mkdir(parents=True, exist_ok=True)
