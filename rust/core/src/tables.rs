@@ -365,7 +365,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::env::{BatchBuffers, BatchEnv, ObsBuffer};
+    use crate::env::{BatchEnv, BatchOutputs};
     use crate::grid::{Assist, GridWorld};
 
     fn options(pairs: &[(&str, OptionValue)]) -> Options {
@@ -510,30 +510,7 @@ mod tests {
         let n = 8;
         let mut b = BatchEnv::new(model, n, cap).unwrap();
         b.seed(&(0..n as u64).collect::<Vec<_>>()).unwrap();
-        let mut obs = vec![0f32; n * VECTOR_OBS_DIM];
-        let (mut r, mut te, mut tr, mut co, mut d) = (
-            vec![0.0; n],
-            vec![false; n],
-            vec![false; n],
-            vec![false; n],
-            vec![0.0; n],
-        );
-        let mut cells = vec![0i32; 3 * n];
-        let mut detour = vec![0.0; n];
-        macro_rules! bufs {
-            () => {
-                BatchBuffers {
-                    obs: ObsBuffer::Vector(&mut obs),
-                    rewards: &mut r,
-                    terminated: &mut te,
-                    truncated: &mut tr,
-                    collided: &mut co,
-                    distance: &mut d,
-                    cells: &mut cells,
-                    detour_penalty: &mut detour,
-                }
-            };
-        }
+        let mut out = BatchOutputs::new(n, false);
         let target_index = |b: &BatchEnv, i: usize| {
             let ts = b.episodes()[i].target() as i32;
             t.target_states.iter().position(|&x| x == ts).unwrap()
@@ -545,7 +522,7 @@ mod tests {
                 })
                 .collect()
         };
-        b.reset(None, bufs!()).unwrap();
+        b.reset(None, out.buffers()).unwrap();
         let mut st: Vec<(usize, usize, usize, u32)> = (0..n)
             .map(|i| {
                 (
@@ -561,7 +538,7 @@ mod tests {
         let (mut compared, mut terms, mut truncs, mut hits) = (0, 0, 0, 0);
         for _ in 0..3000 {
             let actions: Vec<u8> = (0..n).map(|_| rng.random_range(0..6u8)).collect();
-            b.step(&actions, bufs!()).unwrap();
+            b.step(&actions, out.buffers()).unwrap();
             for i in 0..n {
                 if done[i] {
                     // Next-step autoreset: the batch drew a new target.
@@ -581,10 +558,13 @@ mod tests {
                     let idx = (ti * t.num_states + next) * NUM_CASES + k;
                     let term = t.terminates[idx];
                     let trunc = !term && steps + 1 >= t.max_episode_steps;
-                    assert_eq!(c, co[i]);
-                    assert_eq!(t.rewards[idx], r[i] as f32);
-                    assert_eq!((term, trunc), (te[i], tr[i]));
-                    assert_eq!(&t.cells[next * 3..next * 3 + 3], &cells[3 * i..3 * i + 3]);
+                    assert_eq!(c, out.collided[i]);
+                    assert_eq!(t.rewards[idx], out.rewards[i] as f32);
+                    assert_eq!((term, trunc), (out.terminated[i], out.truncated[i]));
+                    assert_eq!(
+                        &t.cells[next * 3..next * 3 + 3],
+                        &out.cells[3 * i..3 * i + 3]
+                    );
                     st[i] = (
                         next,
                         t.next_memory[a * 2 + c as usize] as usize,
@@ -598,7 +578,10 @@ mod tests {
                     hits += c as usize;
                 }
                 let (s1, m1, t1, _) = st[i];
-                assert_eq!(table_obs(s1, m1, t1), obs[i * 13..(i + 1) * 13].to_vec());
+                assert_eq!(
+                    table_obs(s1, m1, t1),
+                    out.obs_vector[i * 13..(i + 1) * 13].to_vec()
+                );
             }
         }
         assert!(compared > 20_000, "{compared}");

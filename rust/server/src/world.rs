@@ -16,8 +16,8 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use sixaxis_core::env::{
-    env_option_info, unreachable_cells, BatchBuffers, BatchEnv, EnvModel, EnvOptions, ObsBuffer,
-    OBS_TARGET, OBS_TERMINAL, VECTOR_OBS_DIM,
+    env_option_info, unreachable_cells, BatchEnv, BatchOutputs, EnvModel, EnvOptions, OBS_TARGET,
+    OBS_TERMINAL, VECTOR_OBS_DIM,
 };
 use sixaxis_core::options::{check_value, Domain, OptionValue};
 use sixaxis_core::request::TrainRequest;
@@ -325,62 +325,12 @@ impl WorldSettings {
     }
 }
 
-/// The output buffers of a world's batch.
-#[derive(Debug)]
-struct Buffers {
-    obs_f: Vec<f32>,
-    obs_i: Vec<i64>,
-    rewards: Vec<f64>,
-    terminated: Vec<bool>,
-    truncated: Vec<bool>,
-    collided: Vec<bool>,
-    distance: Vec<f64>,
-    cells: Vec<i32>,
-    detour: Vec<f64>,
-}
-
-impl Buffers {
-    fn new(n: usize, obs: ObsType) -> Buffers {
-        let (nf, ni) = match obs {
-            ObsType::Index => (0, n),
-            _ => (n * VECTOR_OBS_DIM, 0),
-        };
-        Buffers {
-            obs_f: vec![0.0; nf],
-            obs_i: vec![0; ni],
-            rewards: vec![0.0; n],
-            terminated: vec![false; n],
-            truncated: vec![false; n],
-            collided: vec![false; n],
-            distance: vec![0.0; n],
-            cells: vec![0; 3 * n],
-            detour: vec![0.0; n],
-        }
-    }
-
-    fn view(&mut self, obs: ObsType) -> BatchBuffers<'_> {
-        BatchBuffers {
-            obs: match obs {
-                ObsType::Index => ObsBuffer::Index(&mut self.obs_i),
-                _ => ObsBuffer::Vector(&mut self.obs_f),
-            },
-            rewards: &mut self.rewards,
-            terminated: &mut self.terminated,
-            truncated: &mut self.truncated,
-            collided: &mut self.collided,
-            distance: &mut self.distance,
-            cells: &mut self.cells,
-            detour_penalty: &mut self.detour,
-        }
-    }
-}
-
 /// A world: the batch, its buffers, its specs and where its episode stands.
 #[derive(Debug)]
 pub struct World {
     batch: BatchEnv,
     obs_type: ObsType,
-    buf: Buffers,
+    buf: BatchOutputs,
     specs: ActionObservationSpecs,
     /// The next Step resets the lanes instead of stepping them.
     needs_start: bool,
@@ -453,7 +403,7 @@ impl World {
         let batch = BatchEnv::new(Arc::new(model), s.num_envs, s.max_episode_steps)?;
         Ok(World {
             specs: Self::make_specs(s.num_envs, s.obs_type, num_states),
-            buf: Buffers::new(s.num_envs, s.obs_type),
+            buf: BatchOutputs::new(s.num_envs, s.obs_type == ObsType::Index),
             batch,
             obs_type: s.obs_type,
             needs_start: true,
@@ -611,12 +561,12 @@ impl World {
                 self.batch.seed(&seeds)?;
                 self.seeded = true;
             }
-            self.batch.reset(None, self.buf.view(self.obs_type))?;
+            self.batch.reset(None, self.buf.buffers())?;
             self.needs_start = false;
             EnvironmentStateType::Running
         } else {
             let actions = self.actions(req)?;
-            self.batch.step(&actions, self.buf.view(self.obs_type))?;
+            self.batch.step(&actions, self.buf.buffers())?;
             if n == 1 && self.buf.terminated[0] {
                 EnvironmentStateType::Terminated
             } else if n == 1 && self.buf.truncated[0] {
@@ -689,7 +639,7 @@ impl World {
     fn observation(&self, uid: u64) -> Tensor {
         let b = &self.buf;
         let goals = |range: std::ops::Range<usize>| -> Vec<f32> {
-            b.obs_f
+            b.obs_vector
                 .chunks_exact(VECTOR_OBS_DIM)
                 .flat_map(|row| row[range.clone()].iter().copied())
                 .collect()
@@ -698,13 +648,13 @@ impl World {
             OBSERVATION => match self.obs_type {
                 ObsType::Index => (
                     Payload::Int32s(Int32Array {
-                        array: b.obs_i.iter().map(|&s| s as i32).collect(),
+                        array: b.obs_index.iter().map(|&s| s as i32).collect(),
                     }),
                     self.lead(None),
                 ),
                 _ => (
                     Payload::Floats(FloatArray {
-                        array: b.obs_f.clone(),
+                        array: b.obs_vector.clone(),
                     }),
                     self.lead(Some(VECTOR_OBS_DIM as i32)),
                 ),
@@ -769,7 +719,7 @@ impl World {
             ),
             DETOUR_PENALTY => (
                 Payload::Doubles(DoubleArray {
-                    array: b.detour.clone(),
+                    array: b.detour_penalty.clone(),
                 }),
                 self.lead(None),
             ),

@@ -1,5 +1,6 @@
 //! N episodes stepped together ([`BatchEnv`]) with next-step autoreset and a step cap, into
-//! caller-provided buffers ([`BatchBuffers`]).
+//! caller-provided buffers ([`BatchBuffers`]): borrowed from numpy arrays by the bindings, or
+//! from an owned [`BatchOutputs`] (the server, the tables' checks, tests).
 
 use std::sync::Arc;
 
@@ -37,6 +38,104 @@ pub struct BatchBuffers<'a> {
     pub cells: &'a mut [i32],
     /// Eq. 9's part of the step's reward (<= 0, before `reward_scale`; 0 after a reset).
     pub detour_penalty: &'a mut [f64],
+}
+
+/// Owned output buffers of a batch of `n` lanes: what [`BatchOutputs::buffers`] lends to
+/// [`BatchEnv::reset`] and [`BatchEnv::step`], then read field by field.
+///
+/// ```
+/// use std::sync::Arc;
+/// use sixaxis_core::env::{BatchEnv, BatchOutputs, EnvModel, EnvOptions};
+/// use sixaxis_core::scenario::Scenario;
+///
+/// let s = Scenario::builtin("paper_simple").unwrap();
+/// let model = Arc::new(EnvModel::new(&s, EnvOptions::for_scenario(&s)).unwrap());
+/// let mut batch = BatchEnv::new(model, 4, 200).unwrap();
+/// let mut out = BatchOutputs::new(4, false);
+/// batch.reset(None, out.buffers()).unwrap();
+/// batch.step(&[2u8, 2, 2, 2], out.buffers()).unwrap();
+/// assert_eq!(out.obs_vector.len(), 4 * 13);
+/// assert_eq!(out.cells.len(), 4 * 3);
+/// assert!(out.rewards.iter().all(|r| r.is_finite()));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct BatchOutputs {
+    /// Vector observations, row-major `(n, VECTOR_OBS_DIM)`; empty for index observations.
+    pub obs_vector: Vec<f32>,
+    /// Index observations (state numbers), `n`; empty for vector observations.
+    pub obs_index: Vec<i64>,
+    /// Rewards (after `reward_scale`).
+    pub rewards: Vec<f64>,
+    /// The episode reached its target.
+    pub terminated: Vec<bool>,
+    /// The episode hit the step cap.
+    pub truncated: Vec<bool>,
+    /// The step collided.
+    pub collided: Vec<bool>,
+    /// Distance from the terminal to the target, cells.
+    pub distance: Vec<f64>,
+    /// The terminal's cell, row-major `(n, 3)`.
+    pub cells: Vec<i32>,
+    /// Eq. 9's part of the step's reward (<= 0, before `reward_scale`).
+    pub detour_penalty: Vec<f64>,
+    index_obs: bool,
+}
+
+impl BatchOutputs {
+    /// Zeroed buffers for `n` lanes, with index observations if `index_obs` (state numbers),
+    /// else vector observations.
+    pub fn new(n: usize, index_obs: bool) -> BatchOutputs {
+        let (nf, ni) = if index_obs {
+            (0, n)
+        } else {
+            (n * VECTOR_OBS_DIM, 0)
+        };
+        BatchOutputs {
+            obs_vector: vec![0.0; nf],
+            obs_index: vec![0; ni],
+            rewards: vec![0.0; n],
+            terminated: vec![false; n],
+            truncated: vec![false; n],
+            collided: vec![false; n],
+            distance: vec![0.0; n],
+            cells: vec![0; 3 * n],
+            detour_penalty: vec![0.0; n],
+            index_obs,
+        }
+    }
+
+    /// The number of lanes.
+    pub fn len(&self) -> usize {
+        self.rewards.len()
+    }
+
+    /// Whether there are no lanes.
+    pub fn is_empty(&self) -> bool {
+        self.rewards.is_empty()
+    }
+
+    /// Whether the observations are index observations.
+    pub fn index_obs(&self) -> bool {
+        self.index_obs
+    }
+
+    /// The buffers lent to one [`BatchEnv::reset`] or [`BatchEnv::step`].
+    pub fn buffers(&mut self) -> BatchBuffers<'_> {
+        BatchBuffers {
+            obs: if self.index_obs {
+                ObsBuffer::Index(&mut self.obs_index)
+            } else {
+                ObsBuffer::Vector(&mut self.obs_vector)
+            },
+            rewards: &mut self.rewards,
+            terminated: &mut self.terminated,
+            truncated: &mut self.truncated,
+            collided: &mut self.collided,
+            distance: &mut self.distance,
+            cells: &mut self.cells,
+            detour_penalty: &mut self.detour_penalty,
+        }
+    }
 }
 
 /// N environments stepped together, with next-step autoreset and a step cap.

@@ -10,7 +10,7 @@
 //!   the cells random targets are drawn from.
 //! - [`Episode`] — one env's running episode: [`Episode::reset`], [`Episode::step`].
 //! - [`BatchEnv`] — N episodes with next-step autoreset and a step cap, stepped together
-//!   into caller-provided buffers ([`BatchEnv::step`]).
+//!   into caller-provided buffers ([`BatchEnv::step`]; owned ones: [`BatchOutputs`]).
 //! - [`EnvModel::goal_rewards`] — the rewards of (achieved, desired) goal pairs, for
 //!   hindsight relabelling (`SixAxisAvoidGoal-v0`'s `compute_reward`).
 //!
@@ -62,7 +62,7 @@ use crate::scenario::{Cell, Scenario};
 mod batch;
 mod episode;
 
-pub use batch::{BatchBuffers, BatchEnv, ObsBuffer};
+pub use batch::{BatchBuffers, BatchEnv, BatchOutputs, ObsBuffer};
 pub use episode::{Episode, StepOutcome};
 
 /// Length of the vector observation.

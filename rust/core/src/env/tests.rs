@@ -163,39 +163,16 @@ fn batch_truncates_and_autoresets_next_step() {
     let n = 3;
     let mut b = BatchEnv::new(m, n, 4).unwrap();
     b.seed(&[1, 2, 3]).unwrap();
-    let mut obs = vec![0f32; n * VECTOR_OBS_DIM];
-    let (mut r, mut te, mut tr, mut co, mut d) = (
-        vec![0.0; n],
-        vec![false; n],
-        vec![false; n],
-        vec![false; n],
-        vec![0.0; n],
-    );
-    let mut cells = vec![0i32; 3 * n];
-    let mut detour = vec![0.0; n];
-    macro_rules! bufs {
-        () => {
-            BatchBuffers {
-                obs: ObsBuffer::Vector(&mut obs),
-                rewards: &mut r,
-                terminated: &mut te,
-                truncated: &mut tr,
-                collided: &mut co,
-                distance: &mut d,
-                cells: &mut cells,
-                detour_penalty: &mut detour,
-            }
-        };
-    }
-    b.reset(None, bufs!()).unwrap();
+    let mut out = BatchOutputs::new(n, false);
+    b.reset(None, out.buffers()).unwrap();
     for k in 1..=4 {
-        b.step(&[1u8, 1, 1], bufs!()).unwrap();
-        assert_eq!(tr, vec![k == 4; n]);
+        b.step(&[1u8, 1, 1], out.buffers()).unwrap();
+        assert_eq!(out.truncated, vec![k == 4; n]);
     }
-    b.step(&[1u8, 1, 1], bufs!()).unwrap();
-    assert_eq!(r, vec![0.0; n]);
+    b.step(&[1u8, 1, 1], out.buffers()).unwrap();
+    assert_eq!(out.rewards, vec![0.0; n]);
     assert!(b.episodes().iter().all(|e| e.steps() == 0));
-    assert!(b.step(&[6u8, 0, 0], bufs!()).is_err());
+    assert!(b.step(&[6u8, 0, 0], out.buffers()).is_err());
 }
 
 #[test]
