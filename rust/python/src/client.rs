@@ -519,22 +519,26 @@ impl Client {
         };
         let timeout = self.timeout;
         let inbound = &mut self.inbound;
-        let got = self.rt.block_on(tokio::time::timeout(timeout, async {
-            if let Inbound::Opening(fut) = inbound {
-                let r = fut.await;
-                *inbound = match r {
-                    Ok(resp) => Inbound::Open(Box::new(resp.into_inner())),
-                    Err(status) => {
-                        *inbound = Inbound::Gone;
-                        return Err(status);
-                    }
-                };
-            }
-            match inbound {
-                Inbound::Open(s) => s.message().await,
-                _ => Ok(None),
-            }
-        }));
+        // The timer is made inside the runtime (it needs its context).
+        let got = self.rt.block_on(async move {
+            tokio::time::timeout(timeout, async {
+                if let Inbound::Opening(fut) = inbound {
+                    let r = fut.await;
+                    *inbound = match r {
+                        Ok(resp) => Inbound::Open(Box::new(resp.into_inner())),
+                        Err(status) => {
+                            *inbound = Inbound::Gone;
+                            return Err(status);
+                        }
+                    };
+                }
+                match inbound {
+                    Inbound::Open(s) => s.message().await,
+                    _ => Ok(None),
+                }
+            })
+            .await
+        });
         let what = kind.what().to_string();
         let address = self.address.clone();
         let response = match got {
