@@ -331,6 +331,21 @@ def test_a_dropped_server_fails_every_later_call(sixaxis_bin, transport):
             proc.kill()
 
 
+def _wait_stopped(pid: int) -> None:
+    """Until every thread of process ``pid`` is stopped (SIGSTOP is delivered
+    asynchronously)."""
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        states = [
+            (Path(f"/proc/{pid}/task/{t}/stat").read_text().rsplit(")", 1)[1].split()[0])
+            for t in os.listdir(f"/proc/{pid}/task")
+        ]
+        if all(s == "T" for s in states):
+            return
+        time.sleep(0.01)
+    raise AssertionError(f"process {pid} did not stop")
+
+
 def test_a_stopped_server_times_out_and_the_session_stays_closed(sixaxis_bin, transport):
     """A server that stops answering (SIGSTOP) mid-session: the step raises TimeoutError
     after `timeout`, naming the server and the request; no hang, and every later call
@@ -341,6 +356,7 @@ def test_a_stopped_server_times_out_and_the_session_stays_closed(sixaxis_bin, tr
         env.reset(seed=0)
         env.step(0)
         os.kill(proc.pid, signal.SIGSTOP)
+        _wait_stopped(proc.pid)
         t0 = time.monotonic()
         with pytest.raises(TimeoutError, match=rf"{address}.*Step.*timeout=0.5"):
             env.step(1)

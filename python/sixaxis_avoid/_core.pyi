@@ -171,7 +171,7 @@ class TrainResult:
     @property
     def path(self) -> list[_Cell] | None: ...
     @property
-    def path_array(self) -> npt.npt.NDArray[np.int32]: ...
+    def path_array(self) -> npt.NDArray[np.int32]: ...
     @property
     def success(self) -> bool: ...
     @property
@@ -196,7 +196,7 @@ class TrainResult:
     @property
     def q_precision(self) -> Literal["f64", "f32"]: ...
     @property
-    def state_cells(self) -> npt.npt.NDArray[np.int32]: ...
+    def state_cells(self) -> npt.NDArray[np.int32]: ...
     @property
     def scenario(self) -> Scenario: ...
     def state_of(self, c: _CellLike) -> int | None: ...
@@ -353,10 +353,10 @@ class VecEnvCore:
     truncated: npt.NDArray[np.bool_]
     collided: npt.NDArray[np.bool_]
     distance_to_target: npt.NDArray[np.float64]
-    cells: npt.npt.NDArray[np.int32]
+    cells: npt.NDArray[np.int32]
     detour_penalty: npt.NDArray[np.float64]
     steps: npt.NDArray[np.uint32]
-    current_targets: npt.npt.NDArray[np.int32]
+    current_targets: npt.NDArray[np.int32]
     target_candidates: list[_Cell]
     obstacles: list[_Cell]
     extra_obstacles: list[_Cell]
@@ -578,14 +578,14 @@ class Server:
 # The env server's client (sixaxis_avoid.remote's default transport; docs/SERVER.md).
 @final
 class DmEnvClient:
-    def __init__(
-        self,
+    def __new__(
+        cls,
         address: str,
         *,
         token: str | None = None,
         timeout: float = 30.0,
         connect_timeout: float = 10.0,
-    ) -> None: ...
+    ) -> Self: ...
     @property
     def address(self) -> str: ...
     @property
