@@ -453,13 +453,13 @@ def test_the_transport_keyword_is_checked():
         RemoteVectorEnv("127.0.0.1:9", 2, transport="rust", credentials=object())
 
 
-def test_rust_transport_over_a_unix_socket(tmp_path, near_target):
-    """`unix:PATH` addresses (grpcio needs an authority option for them; docs/SERVER.md)."""
+def test_a_unix_socket_over_both_transports(tmp_path, near_target, transport):
+    """`unix:PATH` addresses (grpcio is given the authority the server takes; docs/SERVER.md)."""
     path = tmp_path / "s.sock"
     with sixaxis_avoid.serve(uds=str(path)) as s:
         assert s.address == f"unix:{path}"
         local = sixaxis_avoid.make("SixAxisAvoid-v0", near_target, random_target=True)
-        with RemoteEnv(s, scenario=near_target, random_target=True, transport="rust") as env:
+        with RemoteEnv(s, scenario=near_target, random_target=True, transport=transport) as env:
             _assert_same(env.reset(seed=4)[0], local.reset(seed=4)[0])
             for a in np.random.default_rng(4).integers(0, 6, size=30):
                 r, lo = env.step(int(a)), local.step(int(a))

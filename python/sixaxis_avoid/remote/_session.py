@@ -223,6 +223,9 @@ class _GrpcSession:
         self.world_name: str | None = None
         self.joined = False
         options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
+        if address.startswith("unix:"):
+            # The socket path is no valid :authority for the server (docs/SERVER.md).
+            options.append(("grpc.default_authority", "localhost"))
         if credentials is None:
             self._channel = grpc.insecure_channel(address, options=options)
         else:
