@@ -1,10 +1,14 @@
 """The Gymnasium envs over the env server (sixaxis_avoid.remote; docs/SERVER.md
 "Gymnasium over the server"): checkers, parity with the in-process envs, errors, timeouts, a
-dropped server, closing, SB3, and a short load test (scripts/load_test.py)."""
+dropped server, closing, SB3, and a short load test (scripts/load_test.py). The tests marked
+with the ``transport`` fixture run over both transports: the Rust client of the extension
+(the default) and grpcio."""
 
 from __future__ import annotations
 
 import importlib
+import os
+import signal
 import sys
 import threading
 import time
@@ -35,6 +39,11 @@ def _load_test_module():
 def server():
     with sixaxis_avoid.serve() as s:
         yield s
+
+
+@pytest.fixture(params=["rust", "grpc"])
+def transport(request):
+    return request.param
 
 
 @pytest.fixture(scope="module")
@@ -93,11 +102,11 @@ def test_bad_vector_arguments():
 
 # Checkers ------------------------------------------------------------------------------------
 @pytest.mark.parametrize("obs_type", ["vector", "index", "goal"])
-def test_gymnasium_check_env(server, obs_type):
+def test_gymnasium_check_env(server, obs_type, transport):
     from gymnasium.utils.env_checker import check_env
 
     kw = {"random_target": True} if obs_type != "index" else {}
-    with RemoteEnv(server, obs_type=obs_type, **kw) as env:
+    with RemoteEnv(server, obs_type=obs_type, transport=transport, **kw) as env:
         check_env(env, skip_render_check=True)
 
 
@@ -138,7 +147,7 @@ def _assert_same(a, b):
         ("goal", {"random_target": True, "arm_aware": True, "reward_scale": 1e-4}),
     ],
 )
-def test_single_env_matches_in_process_step_for_step(server, near_target, obs_type, kw):
+def test_single_env_matches_in_process_step_for_step(server, near_target, obs_type, kw, transport):
     """Same seed and actions: same observations, rewards, flags and info, across resets
     (truncation by the server at the scenario's cap, by TimeLimit in process)."""
     env_id = "SixAxisAvoidGoal-v0" if obs_type == "goal" else "SixAxisAvoid-v0"
@@ -146,7 +155,9 @@ def test_single_env_matches_in_process_step_for_step(server, near_target, obs_ty
     local = sixaxis_avoid.make(env_id, near_target, **local_kw)
     rng = np.random.default_rng(7)
     ends = 0
-    with RemoteEnv(server, scenario=near_target, obs_type=obs_type, **kw) as env:
+    with RemoteEnv(
+        server, scenario=near_target, obs_type=obs_type, transport=transport, **kw
+    ) as env:
         for seed in (3, None, 11):
             o_r, i_r = env.reset(seed=seed)
             o_l, i_l = local.reset(seed=seed)
@@ -164,7 +175,7 @@ def test_single_env_matches_in_process_step_for_step(server, near_target, obs_ty
     assert ends >= 2  # episodes ended, both ways on near_target's 12-step cap
 
 
-def test_vector_env_matches_native_over_two_servers(server, second_server, near_target):
+def test_vector_env_matches_native_over_two_servers(server, second_server, near_target, transport):
     """Lanes split over two servers (and two worlds on one), stepped concurrently: bit for
     bit the native vector env's trajectories, across autoresets and reseeding."""
     n, kw = 7, {"scenario": near_target, "random_target": True, "max_episode_steps": 9}
@@ -172,7 +183,7 @@ def test_vector_env_matches_native_over_two_servers(server, second_server, near_
     addresses = [server.address, second_server.address, server.address]
     rng = np.random.default_rng(1)
     ends = 0
-    with RemoteVectorEnv(addresses, n, **kw) as remote:
+    with RemoteVectorEnv(addresses, n, transport=transport, **kw) as remote:
         assert [w.n for w in remote._worlds] == [3, 2, 2]
         for seed in (5, None, [20 + i for i in range(n)]):
             _assert_same(remote.reset(seed=seed)[0], native.reset(seed=seed)[0])
@@ -187,10 +198,10 @@ def test_vector_env_matches_native_over_two_servers(server, second_server, near_
     assert ends > 10
 
 
-def test_goal_vector_env_matches_native(server, near_target):
+def test_goal_vector_env_matches_native(server, near_target, transport):
     n, kw = 3, {"scenario": near_target, "random_target": True}
     native = SixAxisAvoidGoalVectorEnv(n, **kw)
-    with RemoteVectorEnv(server, n, obs_type="goal", **kw) as remote:
+    with RemoteVectorEnv(server, n, obs_type="goal", transport=transport, **kw) as remote:
         assert remote.single_observation_space == native.single_observation_space
         _assert_same(remote.reset(seed=2)[0], native.reset(seed=2)[0])
         for a in np.random.default_rng(0).integers(0, 6, size=(30, n)):
@@ -198,11 +209,11 @@ def test_goal_vector_env_matches_native(server, near_target):
                 _assert_same(x, y)
 
 
-def test_one_lane_worlds_and_reset_mask_match_native(server, near_target):
+def test_one_lane_worlds_and_reset_mask_match_native(server, near_target, transport):
     n, kw = 4, {"scenario": near_target, "random_target": True}
     native = SixAxisAvoidVectorEnv(n, **kw)
     rng = np.random.default_rng(3)
-    with RemoteVectorEnv(server, n, lanes_per_world=1, **kw) as remote:
+    with RemoteVectorEnv(server, n, lanes_per_world=1, transport=transport, **kw) as remote:
         assert len(remote._worlds) == n
         _assert_same(remote.reset(seed=0)[0], native.reset(seed=0)[0])
         for k in range(50):
@@ -242,8 +253,8 @@ def test_vector_env_gymnasium_contract(server, near_target):
             envs.reset(seed=[1, 5, 9])
 
 
-def test_partial_reset_of_a_multi_lane_world_says_what_to_do(server):
-    with RemoteVectorEnv(server, 3) as envs:
+def test_partial_reset_of_a_multi_lane_world_says_what_to_do(server, transport):
+    with RemoteVectorEnv(server, 3, transport=transport) as envs:
         envs.reset(seed=0)
         with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="lanes_per_world=1"):
             envs.reset(options={"reset_mask": np.array([True, False, False])})
@@ -274,43 +285,45 @@ class _Silent:
         self.server.stop(0)
 
 
-def test_a_silent_server_times_out_naming_it():
+def test_a_silent_server_times_out_naming_it(transport):
     silent = _Silent()
     try:
         t0 = time.monotonic()
         with pytest.raises(TimeoutError, match=rf"{silent.address}.*CreateWorld.*timeout=0.3"):
-            RemoteEnv(silent.address, timeout=0.3)
+            RemoteEnv(silent.address, timeout=0.3, transport=transport)
         assert time.monotonic() - t0 < 5
     finally:
         silent.stop()
 
 
-def test_no_server_is_a_connect_timeout():
+def test_no_server_is_a_connect_timeout(transport):
     import socket
 
     with socket.socket() as s:  # a free port nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     with pytest.raises(TimeoutError, match=rf"127.0.0.1:{port}.*connect_timeout"):
-        RemoteEnv(f"127.0.0.1:{port}", connect_timeout=0.5)
+        RemoteEnv(f"127.0.0.1:{port}", connect_timeout=0.5, transport=transport)
 
 
-def test_a_dropped_server_fails_every_later_call(sixaxis_bin):
+def test_a_dropped_server_fails_every_later_call(sixaxis_bin, transport):
     load_test = _load_test_module()
     proc, address = load_test.start_server(sixaxis_bin)
     try:
-        env = RemoteEnv(address)
-        envs = RemoteVectorEnv(address, 2)
+        env = RemoteEnv(address, transport=transport)
+        envs = RemoteVectorEnv(address, 2, transport=transport)
         env.reset(seed=0)
         envs.reset(seed=0)
         env.step(0)
         proc.kill()
         proc.wait(10)
+        t0 = time.monotonic()
         for _ in range(2):  # the first failure and every call after it
             with pytest.raises(ConnectionError, match=address):
                 env.step(0)
             with pytest.raises(ConnectionError, match=address):
                 envs.step(np.zeros(2, dtype=int))
+        assert time.monotonic() - t0 < 5  # at once, not after a timeout
         env.close()  # closing a broken env does not raise
         envs.close()
     finally:
@@ -318,22 +331,62 @@ def test_a_dropped_server_fails_every_later_call(sixaxis_bin):
             proc.kill()
 
 
-def test_the_token_is_required_and_accepted():
+def _wait_stopped(pid: int) -> None:
+    """Until every thread of process ``pid`` is stopped (SIGSTOP is delivered
+    asynchronously)."""
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        states = [
+            (Path(f"/proc/{pid}/task/{t}/stat").read_text().rsplit(")", 1)[1].split()[0])
+            for t in os.listdir(f"/proc/{pid}/task")
+        ]
+        if all(s == "T" for s in states):
+            return
+        time.sleep(0.01)
+    raise AssertionError(f"process {pid} did not stop")
+
+
+def test_a_stopped_server_times_out_and_the_session_stays_closed(sixaxis_bin, transport):
+    """A server that stops answering (SIGSTOP) mid-session: the step raises TimeoutError
+    after `timeout`, naming the server and the request; no hang, and every later call
+    fails the same way even once the server runs again."""
+    proc, address = _load_test_module().start_server(sixaxis_bin)
+    try:
+        env = RemoteEnv(address, timeout=0.5, transport=transport)
+        env.reset(seed=0)
+        env.step(0)
+        os.kill(proc.pid, signal.SIGSTOP)
+        _wait_stopped(proc.pid)
+        t0 = time.monotonic()
+        with pytest.raises(TimeoutError, match=rf"{address}.*Step.*timeout=0.5"):
+            env.step(1)
+        assert 0.4 < time.monotonic() - t0 < 5
+        os.kill(proc.pid, signal.SIGCONT)
+        with pytest.raises(TimeoutError, match="session is closed"):
+            env.step(1)
+        env.close()
+    finally:
+        os.kill(proc.pid, signal.SIGCONT)
+        proc.kill()
+        proc.wait(10)
+
+
+def test_the_token_is_required_and_accepted(transport):
     with sixaxis_avoid.serve(token="s3cret-token") as guarded:
+        with pytest.raises(PermissionError, match=r"UNAUTHENTICATED.*token"):
+            RemoteEnv(guarded.address, transport=transport)
         with pytest.raises(PermissionError, match="token"):
-            RemoteEnv(guarded.address)
-        with pytest.raises(PermissionError, match="token"):
-            RemoteEnv(guarded.address, token="wrong")
-        with RemoteEnv(guarded.address, token="s3cret-token") as env:
+            RemoteEnv(guarded.address, token="wrong", transport=transport)
+        with RemoteEnv(guarded.address, token="s3cret-token", transport=transport) as env:
             env.reset(seed=0)
             env.step(1)
 
 
-def test_close_leaves_and_destroys_the_world(server):
+def test_close_leaves_and_destroys_the_world(server, transport):
     import grpc
     from dm_env_rpc.v1 import connection, dm_env_rpc_pb2, error
 
-    env = RemoteEnv(server)
+    env = RemoteEnv(server, transport=transport)
     env.reset(seed=0)
     name = env._session.world_name
     env.close()
@@ -345,21 +398,119 @@ def test_close_leaves_and_destroys_the_world(server):
             conn.send(dm_env_rpc_pb2.JoinWorldRequest(world_name=name))
 
 
-def test_a_refused_setting_is_an_invalid_argument_error(server):
-    """The server's own check (here: a scenario that is valid JSON but no scenario) in the
-    in-process words; other refusals are ServerError."""
+def _refusal(address, settings, transport):
     from sixaxis_avoid.remote._session import _Session
 
-    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="num_envs"):
+    with pytest.raises(Exception) as e:
         _Session(
-            server.address,
-            {"num_envs": np.int64(-3)},
+            address,
+            settings,
             token=None,
             credentials=None,
             timeout=10,
             connect_timeout=5,
+            transport=transport,
         )
+    return e.value
+
+
+@pytest.mark.parametrize(
+    ("settings", "cls", "words"),
+    [
+        ({"num_envs": np.int64(-3)}, sixaxis_avoid.InvalidArgumentError, "`num_envs` = -3"),
+        ({"obs_type": "pixels"}, sixaxis_avoid.InvalidArgumentError, "`obs_type`"),
+        ({"num_envs": 2.5}, sixaxis_avoid.InvalidArgumentError, "num_envs"),
+        ({"reward_scale": np.float64(-1.0)}, sixaxis_avoid.InvalidArgumentError, "reward_scale"),
+        ({"nope": True}, sixaxis_avoid.InvalidArgumentError, "nope"),
+        ({"scenario": "no_such_scenario"}, ServerError, "NOT_FOUND.*no_such_scenario"),
+    ],
+    ids=["num_envs", "obs_type", "float", "reward_scale", "unknown", "scenario"],
+)
+def test_a_refused_setting_is_the_same_exception_over_both_transports(server, settings, cls, words):
+    """The server's own check, in the in-process words (InvalidArgumentError naming the
+    setting); other refusals are ServerError with the code. Both transports raise the same
+    class with the same message."""
+    errors = {t: _refusal(server.address, settings, t) for t in ("rust", "grpc")}
+    for e in errors.values():
+        assert type(e) is cls, repr(e)
+        assert re_search(words, str(e)), str(e)
+    assert str(errors["rust"]) == str(errors["grpc"])
+    if cls is ServerError:
+        assert errors["rust"].code == errors["grpc"].code == 5
     assert issubclass(ServerError, RuntimeError)
+
+
+def re_search(pattern: str, text: str) -> bool:
+    import re
+
+    return re.search(pattern, text) is not None
+
+
+def test_the_transport_keyword_is_checked():
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="transport"):
+        RemoteEnv("127.0.0.1:9", transport="tcp")
+    with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=r"transport.*TLS"):
+        RemoteVectorEnv("127.0.0.1:9", 2, transport="rust", credentials=object())
+
+
+def test_a_unix_socket_over_both_transports(tmp_path, near_target, transport):
+    """`unix:PATH` addresses (grpcio is given the authority the server takes; docs/SERVER.md)."""
+    path = tmp_path / "s.sock"
+    with sixaxis_avoid.serve(uds=str(path)) as s:
+        assert s.address == f"unix:{path}"
+        local = sixaxis_avoid.make("SixAxisAvoid-v0", near_target, random_target=True)
+        with RemoteEnv(s, scenario=near_target, random_target=True, transport=transport) as env:
+            _assert_same(env.reset(seed=4)[0], local.reset(seed=4)[0])
+            for a in np.random.default_rng(4).integers(0, 6, size=30):
+                r, lo = env.step(int(a)), local.step(int(a))
+                _assert_same(r[0], lo[0])
+                assert r[1:] == lo[1:]
+                if r[2] or r[3]:
+                    env.reset(seed=5)
+                    local.reset(seed=5)
+
+
+def test_the_rust_client_releases_the_gil_while_it_waits():
+    """A Python thread counts while the main thread waits 1 s in the Rust client for a
+    server that never answers: it counts as fast as it does alone, so the wait held no
+    GIL."""
+    counts = []
+    stop = threading.Event()
+
+    def count():
+        n = 0
+        while not stop.is_set():
+            n += 1
+        counts.append(n)
+
+    def counted(seconds_or_fn):
+        counts.clear()
+        stop.clear()
+        t = threading.Thread(target=count)
+        t.start()
+        t0 = time.monotonic()
+        if callable(seconds_or_fn):
+            seconds_or_fn()
+        else:
+            time.sleep(seconds_or_fn)
+        took = time.monotonic() - t0
+        stop.set()
+        t.join()
+        return counts[0] / took
+
+    silent = _Silent()
+    try:
+        alone = counted(0.5)
+
+        def wait():
+            with pytest.raises(TimeoutError):
+                RemoteEnv(silent.address, timeout=1.0, transport="rust")
+
+        waiting = counted(wait)
+    finally:
+        silent.stop()
+    # Holding the GIL for the whole second would leave the counter near 0.
+    assert waiting > 0.3 * alone, (waiting, alone)
 
 
 # Stable-Baselines3 ----------------------------------------------------------------------------
@@ -425,7 +576,7 @@ def test_short_load_no_step_lost_or_crossed_and_memory_flat(sixaxis_bin):
     assert res["rss_kib_after_load"] - res["rss_kib_after_warmup"] < 8 * 1024, res
 
 
-def test_worlds_are_freed_on_close_and_when_an_env_is_dropped():
+def test_worlds_are_freed_on_close_and_when_an_env_is_dropped(transport):
     """The server's world count (Server.worlds): close() destroys the world; an env dropped
     without close() ends its stream, and the server frees the world."""
     import gc
@@ -437,8 +588,8 @@ def test_worlds_are_freed_on_close_and_when_an_env_is_dropped():
         return server.worlds
 
     with sixaxis_avoid.serve() as s:
-        env = RemoteEnv(s)
-        envs = RemoteVectorEnv([s, s], 4)
+        env = RemoteEnv(s, transport=transport)
+        envs = RemoteVectorEnv([s, s], 4, transport=transport)
         assert wait_for(s, 3) == 3
         envs.close()
         assert wait_for(s, 1) == 1

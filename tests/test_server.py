@@ -318,3 +318,43 @@ def test_cli_serve_prints_its_address_and_drains_on_sigterm(tmp_path):
         [exe, "serve", "--address", "0.0.0.0:0"], capture_output=True, text=True, timeout=30
     )
     assert bad.returncode == 2 and "`address` = 0.0.0.0:0" in bad.stderr
+
+
+# The Rust client of the extension (sixaxis_avoid.remote's default transport) ---------------
+def test_the_rust_client_gets_statuses_and_the_stream_goes_on(server):
+    """DmEnvClient against hostile requests of its own: each Status is the grpcio path's
+    exception (InvalidArgumentError in the core's words, else ServerError with the code),
+    and the same stream serves the next request (docs/SERVER.md "Sessions and worlds")."""
+    from sixaxis_avoid import _core
+    from sixaxis_avoid.remote import ServerError
+
+    c = _core.DmEnvClient(server.address, timeout=10)
+    try:
+        c.send_step(np.array(0, np.int32), [1])  # Step before JoinWorld
+        with pytest.raises(ServerError, match="FAILED_PRECONDITION") as e:
+            c.receive()
+        assert e.value.code == 9
+        c.send_join_world("no-such-world")
+        with pytest.raises(ServerError, match="NOT_FOUND"):
+            c.receive()
+        c.send_create_world({"num_envs": np.int64(0)})
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="`num_envs` = 0"):
+            c.receive()
+        c.send_create_world({"num_envs": np.int64(2), "seed": np.int64(3)})
+        name = c.receive()
+        c.send_join_world(name)
+        specs = c.receive()
+        assert specs["actions"][1][0] == "action"
+        assert specs["observations"][2][:2] == ("reward", 2)  # float64
+        assert c.step(None, [1])[0] == 1  # the reset step: RUNNING
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="`action` = 9 at index 1"):
+            c.step(np.array([0, 9], np.int32), [1, 2])
+        state, obs = c.step(np.array([0, 1], np.int32), [1, 2, 6])
+        assert state == 1 and obs[1].dtype == np.float32 and obs[1].shape == (26,)
+        assert obs[2].dtype == np.float64 and obs[6].dtype == np.bool_
+        assert c.pending == 0 and not c.failed
+    finally:
+        c.close()
+    assert c.failed
+    with pytest.raises(ConnectionError, match="closed"):
+        c.step(None, [1])

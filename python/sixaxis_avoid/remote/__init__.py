@@ -19,9 +19,11 @@ node of a Ray cluster and returns their addresses. :class:`RemoteSB3VecEnv` is t
 Stable-Baselines3 ``VecEnv`` (:class:`sixaxis_avoid.sb3.SixAxisVecEnv`) over a remote
 vector env.
 
-The protocol messages, tensors and errors are handled by the ``dm-env-rpc`` package (its
-``connection``-level message packing, ``tensor_utils`` and ``error``); this module adds the
-stream with timeouts, the Gymnasium semantics and the lane bookkeeping.
+The stream is the extension's Rust client by default (``transport="rust"``:
+:class:`sixaxis_avoid._core.DmEnvClient`, tonic, the GIL released while it waits) or grpcio
+with the ``dm-env-rpc`` package's message packing (``transport="grpc"``, and for TLS
+``credentials``); docs/SERVER.md "The Rust transport". This module adds the Gymnasium
+semantics and the lane bookkeeping.
 """
 
 from __future__ import annotations

@@ -1,6 +1,11 @@
 """The stream to an env server (dm_env_rpc over gRPC; docs/SERVER.md): the session with
-its timeouts and watchdog, world settings, and the protocol's names. Shared by the remote
-envs of this package."""
+its timeouts, world settings, and the protocol's names. Shared by the remote envs of this
+package.
+
+Two transports (docs/SERVER.md "What a step costs"): ``"rust"`` (the default), the
+extension's :class:`sixaxis_avoid._core.DmEnvClient` (tonic, the GIL released while it
+waits), and ``"grpc"``, grpcio with dm-env-rpc's message packing (used for TLS
+``credentials``, which the Rust client does not take)."""
 
 from __future__ import annotations
 
@@ -52,6 +57,9 @@ _INVALID_ARGUMENT = grpc.StatusCode.INVALID_ARGUMENT.value[0]
 #: Tensor payloads held as bytes (dm_env_rpc's packers read them with np.frombuffer).
 _BYTE_PAYLOADS = ("int8s", "uint8s")
 
+#: The transports (docs/SERVER.md "What a step costs").
+TRANSPORTS = ("rust", "grpc")
+
 #: Seconds to wait for one answer of the server, and for the connection.
 DEFAULT_TIMEOUT = 30.0
 DEFAULT_CONNECT_TIMEOUT = 10.0
@@ -81,7 +89,7 @@ def _code_name(code: int) -> str:
 # The watchdog -------------------------------------------------------------------------------
 # One daemon thread for every session of the process: it cancels a stream whose answer is
 # overdue, which makes the waiting read fail at once (a gRPC stream's reads take no timeout).
-_sessions: weakref.WeakSet[_Session] = weakref.WeakSet()
+_sessions: weakref.WeakSet[_GrpcSession] = weakref.WeakSet()
 _watchdog_lock = threading.Lock()
 _watchdog: threading.Thread | None = None
 _WATCH_PERIOD = 0.05
@@ -113,14 +121,87 @@ def _address_of(address: Any) -> str:
     return a
 
 
-class _Session:
-    """One gRPC stream to one server, joined to one world it created.
+def _transport_of(transport: Any, credentials: Any) -> str:
+    """The checked transport: ``None`` is ``"rust"``, or ``"grpc"`` with TLS credentials."""
+    if transport is None:
+        return "grpc" if credentials is not None or not hasattr(_core, "DmEnvClient") else "rust"
+    if transport not in TRANSPORTS:
+        raise invalid("transport", transport, 'must be "rust", "grpc" or None (the default)')
+    if transport == "rust" and credentials is not None:
+        raise invalid(
+            "transport",
+            transport,
+            'the Rust client speaks plain TCP and Unix sockets: TLS credentials need "grpc"',
+        )
+    return transport
+
+
+class _Spec:
+    """One tensor spec of a world: ``name``, ``dtype`` (the protocol's DataType number) and
+    ``shape``, whichever transport read it."""
+
+    __slots__ = ("dtype", "name", "shape")
+
+    def __init__(self, name: str, dtype: int, shape: Any):
+        self.name, self.dtype, self.shape = name, int(dtype), tuple(int(d) for d in shape)
+
+
+class _Specs:
+    """A world's specs: ``actions`` and ``observations``, uid -> :class:`_Spec`."""
+
+    def __init__(self, actions: dict[int, _Spec], observations: dict[int, _Spec]):
+        self.actions, self.observations = actions, observations
+
+    @classmethod
+    def of_proto(cls, specs: Any) -> _Specs:
+        def part(m):
+            return {int(uid): _Spec(s.name, s.dtype, s.shape) for uid, s in m.items()}
+
+        return cls(part(specs.actions), part(specs.observations))
+
+    @classmethod
+    def of_rust(cls, specs: dict[str, dict[int, tuple]]) -> _Specs:
+        def part(m):
+            return {int(uid): _Spec(*t) for uid, t in m.items()}
+
+        return cls(part(specs["actions"]), part(specs["observations"]))
+
+
+def _Session(
+    address: str,
+    settings: dict[str, Any],
+    *,
+    token: str | None,
+    credentials: Any,
+    timeout: float,
+    connect_timeout: float,
+    transport: str | None = None,
+) -> _GrpcSession | _RustSession:
+    """One stream to one server, joined to one world it created with ``settings``, over
+    ``transport`` (:data:`TRANSPORTS`; None: ``"rust"``, or ``"grpc"`` with TLS
+    ``credentials``)."""
+    kind = _transport_of(transport, credentials)
+    cls = _RustSession if kind == "rust" else _GrpcSession
+    return cls(
+        address,
+        settings,
+        token=token,
+        credentials=credentials,
+        timeout=timeout,
+        connect_timeout=connect_timeout,
+    )
+
+
+class _GrpcSession:
+    """One gRPC stream (grpcio) to one server, joined to one world it created.
 
     Requests are written without waiting (:meth:`send`) and answers read in order
     (:meth:`receive`), so several sessions can have a request in flight at once. Any
     failure of the stream (a timeout, a dropped server, a refused token) closes the
     session: every later request raises the same error, nothing is retried silently.
     """
+
+    transport = "grpc"
 
     def __init__(
         self,
@@ -142,6 +223,9 @@ class _Session:
         self.world_name: str | None = None
         self.joined = False
         options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
+        if address.startswith("unix:"):
+            # The socket path is no valid :authority for the server (docs/SERVER.md).
+            options.append(("grpc.default_authority", "localhost"))
         if credentials is None:
             self._channel = grpc.insecure_channel(address, options=options)
         else:
@@ -167,7 +251,7 @@ class _Session:
                 dm_env_rpc_pb2.JoinWorldRequest(world_name=self.world_name), "JoinWorld"
             )
             self.joined = True
-            self.specs = joined.specs
+            self.specs = _Specs.of_proto(joined.specs)
         except BaseException:
             self.close()
             raise
@@ -184,7 +268,8 @@ class _Session:
         self._requests.put(env_request)
 
     def receive(self) -> Any:
-        """The answer to the oldest request sent and not yet received."""
+        """The answer to the oldest request sent and not yet received (a Step's: the
+        observations as :meth:`observations` gives them)."""
         if self._failure is not None:
             raise self._failure
         field, what = self._pending.popleft()
@@ -213,12 +298,40 @@ class _Session:
         self.send(request, what)
         return self.receive()
 
+    def send_reset(self, settings: dict[str, Any]) -> None:
+        """Write a Reset with ``settings`` (``seed``, ``reset_mask``: Python values)."""
+        packed = {k: tensor_utils.pack_tensor(v) for k, v in settings.items()}
+        self.send(dm_env_rpc_pb2.ResetRequest(settings=packed), "Reset")
+
+    def send_step(self, world: _World, actions: np.ndarray | None) -> None:
+        """Write a Step of ``world`` (``actions`` int32, shaped as the action spec)."""
+        self.send(world.step_request(actions), "Step")
+
+    def step(self, world: _World, actions: np.ndarray | None) -> Any:
+        """A Step's round trip; its answer as :meth:`receive` gives it."""
+        return self.call(world.step_request(actions), "Step")
+
+    @staticmethod
+    def observations(answer: Any) -> dict[int, np.ndarray]:
+        """A Step answer's observations, uid -> flat array."""
+        out = {}
+        for uid, tensor in answer.observations.items():
+            field = tensor.WhichOneof("payload")
+            if field in _BYTE_PAYLOADS:
+                out[uid] = np.frombuffer(
+                    getattr(tensor, field).array, np.int8 if field == "int8s" else np.uint8
+                )
+            elif field is None:
+                out[uid] = np.zeros(0, np.float32)
+            else:
+                # np.array reads the repeated field as a buffer, ~300x np.fromiter (which
+                # dm_env_rpc's packers use) on upb protobuf at N = 4096 (docs/PERFORMANCE.md
+                # "Server").
+                out[uid] = np.array(getattr(tensor, field).array, _PAYLOAD_DTYPES[field])
+        return out
+
     def _status_error(self, code: int, message: str, what: str) -> Exception:
-        if code == _INVALID_ARGUMENT:
-            # The server checks with the core's table, in the in-process env's words.
-            err = _core.InvalidArgumentError(message)
-            return err
-        return ServerError(self.address, what, code, message)
+        return _status_error(self.address, code, message, what)
 
     def _stream_error(self, e: grpc.RpcError, what: str) -> Exception:
         code = e.code() if hasattr(e, "code") else None
@@ -283,6 +396,152 @@ class _Session:
         self._requests.put(None)
         self._call.cancel()
         self._channel.close()
+
+
+def _status_error(address: str, code: int, message: str, what: str) -> Exception:
+    """The exception of an error Status the server answered ``what`` with."""
+    if code == _INVALID_ARGUMENT:
+        # The server checks with the core's table, in the in-process env's words.
+        return _core.InvalidArgumentError(message)
+    return ServerError(address, what, code, message)
+
+
+#: numpy dtypes of the Tensor payload fields read as repeated numbers.
+_PAYLOAD_DTYPES = {
+    "floats": np.float32,
+    "doubles": np.float64,
+    "int32s": np.int32,
+    "int64s": np.int64,
+    "uint32s": np.uint32,
+    "uint64s": np.uint64,
+    "bools": np.bool_,
+    "strings": object,
+}
+
+
+class _RustSession:
+    """One stream to one server over the extension's Rust client
+    (:class:`sixaxis_avoid._core.DmEnvClient`), joined to one world it created.
+
+    The same interface as :class:`_GrpcSession`: requests written without waiting, answers
+    read in order; a Step answer is ``(state, {uid: flat array})`` decoded in Rust. The
+    client's own timeouts bound every wait; a failure of the stream closes the session and
+    every later request raises the same error. :meth:`send` / :meth:`call` take
+    dm_env_rpc request messages too (sent encoded), for tools that speak protobuf.
+    """
+
+    transport = "rust"
+
+    def __init__(
+        self,
+        address: str,
+        settings: dict[str, Any],
+        *,
+        token: str | None,
+        credentials: Any,
+        timeout: float,
+        connect_timeout: float,
+    ):
+        self.address = address
+        self.timeout = timeout
+        self.world_name: str | None = None
+        self.joined = False
+        self._closed = False
+        # The protobuf field and name of each answer awaited (None: decoded by the client).
+        self._pending: deque[tuple[str, str] | None] = deque()
+        self._client = _core.DmEnvClient(
+            address, token=token, timeout=timeout, connect_timeout=connect_timeout
+        )
+        try:
+            self._client.send_create_world(settings)
+            self.world_name = self._client.receive()
+            self._client.send_join_world(self.world_name)
+            self.specs = _Specs.of_rust(self._client.receive())
+            self.joined = True
+        except BaseException:
+            self.close()
+            raise
+
+    # Requests ------------------------------------------------------------------------------
+    def send(self, request: Any, what: str) -> None:
+        """Write ``request`` (a dm_env_rpc request message) without waiting for its answer."""
+        env_request, field = message_utils.pack_environment_request(request)
+        self._client.send_raw(env_request.SerializeToString(), what)
+        self._pending.append((field, what))
+
+    def receive(self) -> Any:
+        """The answer to the oldest request sent and not yet received."""
+        raw = self._pending.popleft() if self._pending else None
+        answer = self._client.receive()
+        if raw is None:
+            return answer
+        field, what = raw
+        response = dm_env_rpc_pb2.EnvironmentResponse.FromString(answer)
+        try:
+            return message_utils.unpack_environment_response(response, field)
+        except error.DmEnvRpcError as e:
+            raise _status_error(self.address, e.code, e.message, what) from None
+
+    def call(self, request: Any, what: str) -> Any:
+        self.send(request, what)
+        return self.receive()
+
+    def send_reset(self, settings: dict[str, Any]) -> None:
+        """Write a Reset with ``settings`` (``seed``, ``reset_mask``: Python values)."""
+        self._client.send_reset(settings)
+        self._pending.append(None)
+
+    def send_step(self, world: _World, actions: np.ndarray | None) -> None:
+        """Write a Step of ``world`` (``actions`` int32, shaped as the action spec)."""
+        a = None if actions is None else world.actions(actions)
+        self._client.send_step(a, world.requested, world.action_uid)
+        self._pending.append(None)
+
+    def step(self, world: _World, actions: np.ndarray | None) -> Any:
+        """A Step's round trip (one release of the GIL)."""
+        if self._pending:
+            self.send_step(world, actions)
+            return self.receive()
+        a = None if actions is None else world.actions(actions)
+        return self._client.step(a, world.requested, world.action_uid)
+
+    @staticmethod
+    def observations(answer: Any) -> dict[int, np.ndarray]:
+        """A Step answer's observations, uid -> flat array."""
+        if isinstance(answer, tuple):
+            return answer[1]
+        return _GrpcSession.observations(answer)  # an answer to a protobuf request
+
+    # Closing ---------------------------------------------------------------------------------
+    @property
+    def failed(self) -> bool:
+        return self._client.failed
+
+    def close(self) -> None:
+        """LeaveWorld and DestroyWorld (when the stream still works), then close the stream."""
+        c = getattr(self, "_client", None)
+        if c is None:
+            return
+        if not c.failed and self.world_name is not None:
+            try:
+                while self._pending:
+                    self.receive()
+                if self.joined:
+                    c.send_leave_world()
+                    c.receive()
+                    self.joined = False
+                c.send_destroy_world(self.world_name)
+                c.receive()
+            except (ConnectionError, TimeoutError, ServerError, PermissionError):
+                pass
+            self.world_name = None
+        self._shutdown()
+
+    def _shutdown(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._pending.clear()
+            self._client.close()
 
 
 # World settings --------------------------------------------------------------------------------
@@ -357,7 +616,7 @@ class _World:
     """A world of ``n`` lanes on one session: its uids, the Step request and the decoding of
     an answer into arrays of ``n`` rows."""
 
-    def __init__(self, session: _Session, lanes: slice, obs_type: str):
+    def __init__(self, session: _GrpcSession | _RustSession, lanes: slice, obs_type: str):
         self.session = session
         self.lanes = lanes
         self.n = lanes.stop - lanes.start
@@ -378,39 +637,38 @@ class _World:
         self.names = names[: 1 + (2 if obs_type == "goal" else 0)]  # the observation part
         self.requested = [obs_uids[n] for n in (*names, *self.extras)]
         self.uid_names = {obs_uids[n]: n for n in (*names, *self.extras)}
-        # Per uid: its name, dm_env_rpc's packer of its dtype and the shape with a lane axis
-        # (a 1-lane world's tensors have none).
+        # Per uid: its name and the shape with a lane axis (a 1-lane world's tensors have
+        # none).
         self._unpack = {}
         for uid, name in self.uid_names.items():
             spec = specs.observations[uid]
-            dtype = tensor_utils.data_type_to_np_type(spec.dtype)
-            shape = tuple(spec.shape) if self.n > 1 else (1, *spec.shape)
-            self._unpack[uid] = (name, tensor_utils.get_packer(dtype), shape)
+            shape = spec.shape if self.n > 1 else (1, *spec.shape)
+            self._unpack[uid] = (name, shape)
         self.action_uid = act_uids["action"]
         self.action_dtype = tensor_utils.data_type_to_np_type(specs.actions[self.action_uid].dtype)
 
     def step_request(self, actions: np.ndarray | None) -> Any:
+        """The Step request message (dm_env_rpc's protobuf) of ``actions``."""
         req = dm_env_rpc_pb2.StepRequest(requested_observations=self.requested)
         if actions is not None:
             a = actions if self.n > 1 else actions.reshape(())
             req.actions[self.action_uid].CopyFrom(tensor_utils.pack_tensor(a, self.action_dtype))
         return req
 
-    def decode(self, response: Any) -> dict[str, np.ndarray]:
-        """Each requested observation as an array with a leading axis of ``n`` lanes."""
+    def actions(self, actions: np.ndarray) -> np.ndarray:
+        """``actions`` (int32, one per lane) shaped as the action spec."""
+        return actions if self.n > 1 else actions.reshape(())
+
+    def decode(self, answer: Any) -> dict[str, np.ndarray]:
+        """Each requested observation of a Step answer as an array with a leading axis of
+        ``n`` lanes."""
         out: dict[str, np.ndarray] = {}
         unpack = self._unpack
-        for uid, tensor in response.observations.items():
+        for uid, flat in self.session.observations(answer).items():
             entry = unpack.get(uid)
             if entry is None:
                 continue
-            name, packer, shape = entry
-            if packer.name in _BYTE_PAYLOADS:
-                flat = packer.unpack(tensor)
-            else:
-                # np.array reads the repeated field as a buffer, ~300x np.fromiter (which
-                # packer.unpack uses) on upb protobuf at N = 4096 (docs/PERFORMANCE.md "Server").
-                flat = np.array(getattr(tensor, packer.name).array, packer.np_type)
+            name, shape = entry
             try:
                 out[name] = flat.reshape(shape)
             except ValueError:
@@ -418,7 +676,7 @@ class _World:
                     self.session.address,
                     "Step",
                     None,
-                    f"its {name!r} has {flat.size} {packer.name} values, its spec says "
+                    f"its {name!r} has {flat.size} {flat.dtype} values, its spec says "
                     f"shape {list(shape)}",
                 ) from None
         if len(out) != len(unpack):
@@ -432,4 +690,4 @@ class _World:
 
 
 def _seed_settings(seed: int | None) -> dict[str, Any]:
-    return {} if seed is None else {"seed": tensor_utils.pack_tensor(np.int64(seed))}
+    return {} if seed is None else {"seed": np.int64(seed)}

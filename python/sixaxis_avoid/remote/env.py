@@ -19,7 +19,6 @@ from sixaxis_avoid.remote._session import (
     _settings,
     _space_of,
     _World,
-    dm_env_rpc_pb2,
 )
 
 
@@ -47,6 +46,10 @@ class RemoteEnv(gym.Env):
     raises :class:`~sixaxis_avoid.InvalidArgumentError`, any other refusal
     :class:`ServerError`. :meth:`close` leaves and destroys the world; the env is also a
     context manager.
+
+    ``transport`` is ``"rust"`` (the default: the extension's client, the GIL released
+    while it waits) or ``"grpc"`` (grpcio; the default when TLS ``credentials``, a
+    ``grpc.ChannelCredentials``, are given); docs/SERVER.md "What a step costs".
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": []}
@@ -59,6 +62,7 @@ class RemoteEnv(gym.Env):
         timeout: float = DEFAULT_TIMEOUT,
         connect_timeout: float = DEFAULT_CONNECT_TIMEOUT,
         credentials: Any = None,
+        transport: str | None = None,
         **env_kwargs: Any,
     ):
         self.address = _address_of(address)
@@ -77,6 +81,7 @@ class RemoteEnv(gym.Env):
             settings,
             token=token,
             credentials=credentials,
+            transport=transport,
             timeout=timeout,
             connect_timeout=connect_timeout,
         )
@@ -112,8 +117,8 @@ class RemoteEnv(gym.Env):
             seed = int(self.np_random.integers(0, 2**31))
         self._seeded = True
         s = self._session
-        s.send(dm_env_rpc_pb2.ResetRequest(settings=_seed_settings(seed)), "Reset")
-        s.send(self._world.step_request(None), "Step")
+        s.send_reset(_seed_settings(seed))
+        s.send_step(self._world, None)
         s.receive()
         d = self._world.decode(s.receive())
         return self._obs(d), self._info(d)
@@ -122,9 +127,7 @@ class RemoteEnv(gym.Env):
         a = np.asarray(action)
         if a.dtype.kind not in "iu" or a.size != 1:
             raise invalid("action", action, "must be an integer in 0..6")
-        d = self._world.decode(
-            self._session.call(self._world.step_request(a.astype(np.int32)), "Step")
-        )
+        d = self._world.decode(self._session.step(self._world, a.astype(np.int32)))
         return (
             self._obs(d),
             float(d["reward"][0]),

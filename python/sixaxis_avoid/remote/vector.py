@@ -25,8 +25,6 @@ from sixaxis_avoid.remote._session import (
     _settings,
     _space_of,
     _World,
-    dm_env_rpc_pb2,
-    tensor_utils,
 )
 
 
@@ -68,7 +66,8 @@ class RemoteVectorEnv(VectorEnv):
     once); a server resets either every lane of a world or, with ``lanes_per_world=1``,
     exactly the lanes asked for.
 
-    ``token``, ``timeout``, ``connect_timeout`` and ``credentials`` as :class:`RemoteEnv`;
+    ``token``, ``timeout``, ``connect_timeout``, ``credentials`` and ``transport`` as
+    :class:`RemoteEnv`;
     a failure of any server fails the step (no lane is silently dropped). :meth:`close`
     leaves and destroys every world.
     """
@@ -87,6 +86,7 @@ class RemoteVectorEnv(VectorEnv):
         timeout: float = DEFAULT_TIMEOUT,
         connect_timeout: float = DEFAULT_CONNECT_TIMEOUT,
         credentials: Any = None,
+        transport: str | None = None,
         copy: bool = True,
         lanes_per_world: int | None = None,
         **env_kwargs: Any,
@@ -141,6 +141,7 @@ class RemoteVectorEnv(VectorEnv):
                     settings,
                     token=token,
                     credentials=credentials,
+                    transport=transport,
                     timeout=timeout,
                     connect_timeout=connect_timeout,
                 )
@@ -216,12 +217,12 @@ class RemoteVectorEnv(VectorEnv):
         sent = []
         for w, s in zip(self._worlds, seeds):
             if mask is None or mask[w.lanes].all():
-                w.session.send(dm_env_rpc_pb2.ResetRequest(settings=_seed_settings(s)), "Reset")
+                w.session.send_reset(_seed_settings(s))
             elif not mask[w.lanes].any():
                 continue
             else:
                 self._reset_lanes(w, mask[w.lanes])
-            w.session.send(w.step_request(None), "Step")
+            w.session.send_step(w, None)
             sent.append(w)
         for w in sent:
             if mask is None or mask[w.lanes].all():
@@ -243,9 +244,9 @@ class RemoteVectorEnv(VectorEnv):
     def _reset_lanes(w: _World, lanes: np.ndarray) -> None:
         """Reset some lanes of a multi-lane world (a Reset with ``reset_mask``, for a server
         that takes it)."""
-        settings = {"reset_mask": tensor_utils.pack_tensor(lanes)}
         try:
-            w.session.call(dm_env_rpc_pb2.ResetRequest(settings=settings), "Reset")
+            w.session.send_reset({"reset_mask": lanes})
+            w.session.receive()
         except _core.InvalidArgumentError as e:
             raise invalid(
                 "options['reset_mask']",
@@ -274,11 +275,11 @@ class RemoteVectorEnv(VectorEnv):
         for w in self._worlds:
             if w.n == 1 and self._ended[w.lanes.start]:
                 # The dm_env world ended its episode: the autoreset step starts the next one.
-                w.session.send(dm_env_rpc_pb2.ResetRequest(), "Reset")
-                w.session.send(w.step_request(None), "Step")
+                w.session.send_reset({})
+                w.session.send_step(w, None)
                 restart.append(w)
             else:
-                w.session.send(w.step_request(a[w.lanes]), "Step")
+                w.session.send_step(w, a[w.lanes])
         for w in restart:
             w.session.receive()
         for w in self._worlds:

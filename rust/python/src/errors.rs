@@ -227,6 +227,12 @@ pub fn invalid_argument(
     to_py(py, Error::argument(name, value, reason))
 }
 
+/// `InvalidArgumentError` with a message already in the core's words (an env server's
+/// INVALID_ARGUMENT answer, checked there by the core's table).
+pub fn invalid_argument_message(py: Python<'_>, message: String) -> PyErr {
+    build(py, &INVALID_ARGUMENT_ERROR, (message,), &[])
+}
+
 fn panic_message(payload: &(dyn Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
         (*s).to_string()
@@ -258,9 +264,19 @@ where
     F: Send + FnOnce() -> sixaxis_core::Result<T>,
     T: Send,
 {
+    detached(py, f, to_py)
+}
+
+/// [`run`] for code with errors of its own (the env server client's), mapped by `map`.
+pub fn detached<T, E, F>(py: Python<'_>, f: F, map: fn(Python<'_>, E) -> PyErr) -> PyResult<T>
+where
+    F: Send + FnOnce() -> Result<T, E>,
+    T: Send,
+    E: Send,
+{
     match py.detach(move || catch_unwind(AssertUnwindSafe(f))) {
         Ok(Ok(v)) => Ok(v),
-        Ok(Err(e)) => Err(to_py(py, e)),
+        Ok(Err(e)) => Err(map(py, e)),
         Err(payload) => Err(internal(py, payload)),
     }
 }

@@ -7,6 +7,7 @@
 use pyo3::prelude::*;
 
 mod arm;
+mod client;
 mod convert;
 mod env_core;
 mod errors;
@@ -82,6 +83,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tables::env_tables, m)?)?;
     m.add_class::<serve::PyServer>()?;
     m.add_function(wrap_pyfunction!(serve::serve, m)?)?;
+    m.add_class::<client::PyDmEnvClient>()?;
     m.add("VECTOR_OBS_DIM", sixaxis_core::env::VECTOR_OBS_DIM)?;
     let (t, g) = (
         sixaxis_core::env::OBS_TERMINAL,
