@@ -257,7 +257,8 @@ def cmd_list(args: argparse.Namespace) -> int:
         for d in rows:
             print(
                 f"  {label} {d['id']:<22} {d['group']:<18} grid {'x'.join(map(str, d['grid']))}"
-                f", {d['obstacles']} obstacles, optimum {d['optimal_lengths']} moves"
+                f" ({d['states']} states, {d['cell_mm']:g} mm), {d['obstacles']} obstacles, "
+                f"{d['blocked']} blocked cells, optimum {d['optimal_lengths']} moves"
             )
     return 0
 

@@ -47,6 +47,10 @@ def fmt_steps(v: Any) -> str:
 
 
 def fmt_ci(point: float, ci: list[float], digits: int = 3) -> str:
+    """``0.800 [0.733, 0.867]``; a zero-width interval (every resample the same: all runs
+    scored alike) reads ``1.000 (all equal)``, not as certainty."""
+    if ci[1] - ci[0] < 10.0 ** (-digits - 2):
+        return f"{point:.{digits}f} (all equal)"
     return f"{point:.{digits}f} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
 
 
@@ -291,9 +295,12 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
         by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
         for b in a["axis"]:
             e = by.get(str(b))
-            runs = ", ".join(sorted(recorded.get((lr, b), set()))) or "no runs"
+            statuses = recorded.get((lr, b), set())
+            runs = ", ".join(sorted(statuses)) or "no runs"
             if e is None:
-                out.append(f"| {lr} | {fmt_steps(b)} | **untuned** | — | — | {runs} |")
+                # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".
+                status = "n/a" if statuses == {"n/a"} else "**untuned**"
+                out.append(f"| {lr} | {fmt_steps(b)} | {status} | — | — | {runs} |")
                 continue
             obj = e.get("objective")
             obj_s = f"{obj:.3f}" if isinstance(obj, (int, float)) else str(obj or "—")
@@ -332,7 +339,9 @@ STATISTICS = [
     "95% score interval (it stays inside [0, 1] and does not shrink to a point when every "
     "run succeeds or fails).",
     "- **SPL**: the mean over tasks and seeds, with a 95% stratified-bootstrap interval "
-    "(rliable; tasks are the strata, seeds are resampled within each task).",
+    "(rliable; tasks are the strata, seeds are resampled within each task). *all equal*: "
+    "every run scored the same, so the bootstrap has nothing to resample and gives no "
+    "interval; read the success rate's Wilson interval instead.",
     f"- **IQM** is shown only where fewer than {stats.IQM_DEGENERATE_FRACTION:.0%} of the "
     "scores are exactly 0 or 1; with more, the middle half of the scores is mostly zeros and "
     "ones and the IQM is a stretched copy of the mean (the column then gives that fraction).",
@@ -409,9 +418,10 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             "## Headline",
             "",
             f"<!-- {HEADLINE_SECTION}:begin -->",
-            f"No results of suite {suite.name} yet: `{a['results_dir']}` holds no run files. "
-            "Run the commands under *How to run* in docs/BENCHMARKS.md; "
-            + (f"v1's results are in [{Path(hist).name}]({hist})." if hist else ""),
+            # Plain paths, no links: README.md shows a copy of this section.
+            f"No results of suite {suite.name} yet: `{a['results_dir']}` holds no run files "
+            "(the commands are under *How to run* in docs/BENCHMARKS.md)."
+            + (f" The v1 study is in {out.parent / Path(hist).name}." if hist else ""),
             f"<!-- {HEADLINE_SECTION}:end -->",
             "",
         ]
@@ -422,9 +432,10 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         head = a["headline"]
         b = head["budget"] if head else max(a["budgets"])
         n_runs = len(a["runs"])
+        n_seeds = len({r["spec"]["seed"] for r in a["runs"]})
         L += [
             f"{n_runs} runs: {len(a['learners'])} learners x {len(a['tasks'])} tasks x "
-            f"seeds x {len(a['budgets'])} budgets"
+            f"{n_seeds} seeds x {len(a['budgets'])} budgets"
             + (f". {provenance(m)}." if m and "date" in m else ".")
             + "".join(f" {s}" for s in [run_machines(a["runs"])] if s),
             "",
