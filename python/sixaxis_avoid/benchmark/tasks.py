@@ -100,7 +100,8 @@ class Task:
     @cached_property
     def blocked_states(self) -> np.ndarray:
         """The states (the core's numbering) where the terminal collides, as the core's grid
-        world computes them (docs/SCENARIOS.md, "The grid world")."""
+        world computes them, see
+        docs/SCENARIOS.md, "The grid world: states, actions, collisions, rewards"."""
         from sixaxis_avoid import _core
 
         return np.flatnonzero(np.asarray(_core.EnvCore(self.scenario, obs="index").blocked))
