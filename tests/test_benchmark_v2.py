@@ -302,6 +302,7 @@ def test_v2_report_on_synthetic_runs(tmp_path):
     assert "bfs (reference, not ranked)" in text and "| bfs | 10k | n/a |" in text
     assert "| alpha | 0.000 (all equal) ✗ | 0.800 [" in text  # no zero-width "interval"
     assert "270 runs: 3 learners x 3 tasks x 10 seeds x 3 budgets" in text
+    assert "| generated:easy | 1 | 0.700, 0.700 [0.397, 0.892] (7/10) |" in text  # per group
     assert "[BENCHMARKS-v1.md](BENCHMARKS-v1.md)" in text
     assert (tmp_path / "figures" / "bench-v2" / "bench_v2_curves.png").stat().st_size > 0
     assert (tmp_path / "figures" / "bench-v2" / "bench_v2_profiles.png").stat().st_size > 0

@@ -529,6 +529,26 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                 k, n = v["per_task"][t]["success"]
                 cells.append(f"{v['per_task'][t]['mean']:.3f} ({k}/{n})")
             L.append(f"| {t} | " + " | ".join(cells) + " |")
+        groups: dict[str, list[str]] = {}
+        for t in a["tasks"]:
+            groups.setdefault(suite.task(t).group, []).append(t)
+        L += [
+            "",
+            f"### Per group ({fmt_steps(b)} env steps)",
+            "",
+            "Mean SPL over the group's tasks and seeds; success with its Wilson 95% interval.",
+            "",
+            "| group | tasks | " + " | ".join(a["per_budget"][b]["learners"]) + " |",
+            "|---|---|" + "---|" * len(a["per_budget"][b]["learners"]),
+        ]
+        for g, ts in groups.items():
+            cells = []
+            for v in a["per_budget"][b]["learners"].values():
+                k = sum(v["per_task"][t]["success"][0] for t in ts)
+                n = sum(v["per_task"][t]["success"][1] for t in ts)
+                mean = float(np.mean([v["per_task"][t]["mean"] for t in ts]))
+                cells.append(f"{mean:.3f}, " + fmt_wilson(stats.wilson(k, n)))
+            L.append(f"| {g} | {len(ts)} | " + " | ".join(cells) + " |")
         L += [
             "",
             f"## Env steps to SPL ≥ {stats.SPL_REACHED}",
