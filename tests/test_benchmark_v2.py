@@ -319,3 +319,30 @@ def test_v2_report_before_any_run_says_so(tmp_path):
     assert "No results of suite v2 yet" in text
     assert "| paper_simple-25mm | paper@25mm | 25x33x29 | 23925 | 25 |" in text
     assert "| (none yet) | — | **untuned** |" in text or "**untuned**" in text
+
+
+def test_v1_report_is_the_history_page_and_links_the_current_one(tmp_path, monkeypatch):
+    """A v1 study's report (by default docs/BENCHMARKS-v1.md) names its own --out in its
+    command and links docs/BENCHMARKS.md; here on a slice of the committed v1 results."""
+    import shutil
+    from pathlib import Path
+
+    from sixaxis_avoid.benchmark.__main__ import main
+
+    src = Path(__file__).resolve().parent.parent / "docs" / "results" / "v1"
+    study = tmp_path / "docs" / "results" / "v1"
+    (study / "runs").mkdir(parents=True)
+    manifest = json.loads((src / "study.json").read_text())
+    manifest["learners"], manifest["tasks"] = ["bfs", "q_assist"], ["paper_simple", "gen-easy-0"]
+    (study / "study.json").write_text(json.dumps(manifest))
+    for lr in manifest["learners"]:
+        for t in manifest["tasks"]:
+            for seed in (0, 1):
+                name = f"{t}__{lr}__s{seed}.json"
+                shutil.copy(src / "runs" / name, study / "runs" / name)
+    monkeypatch.chdir(tmp_path)
+    assert main(["report", "--results", "docs/results/v1", "--reps", "100"]) == 0
+    text = (tmp_path / "docs" / "BENCHMARKS-v1.md").read_text()
+    assert "report --results docs/results/v1 --out docs/BENCHMARKS-v1.md\n" in text
+    assert "the current benchmark is [BENCHMARKS.md](BENCHMARKS.md)" in text
+    assert not (tmp_path / "docs" / "BENCHMARKS.md").exists()
