@@ -248,6 +248,8 @@ def write_synthetic_study(tmp_path):
                                    "optimal_lengths": [9] * n, "env_steps": spec["budget"]},
                         "host": {"machine": "synthetic CPU, 2 cores"},
                     }  # fmt: skip
+                    if (lr, b, seed, t["id"]) == ("beta", 1000, 0, "paper_simple"):
+                        record["result"]["env_steps"] = 1500  # one run over its budget
                     runner.write_run(out, record)
     (out / "study.json").write_text(json.dumps({
         "suite": raw, "learners": ["alpha", "beta", "bfs"], "tasks": TASKS,
@@ -290,6 +292,8 @@ def test_v2_report_on_synthetic_runs(tmp_path):
     # 1k to 10k and is flat from 10k to 100k: the headline budget is 10k.
     assert a["best"] == ["alpha"]
     assert a["headline"]["budget"] == 10000 and a["headline"]["plateaued"]
+    over = [{"learner": "beta", "budget": 1000, "runs": 1, "of": 30, "max_env_steps": 1500}]
+    assert a["over_budget"] == over
     text = md.read_text()
     assert "## Headline (10k env steps)" in text and "have plateaued" in text
     assert "benchmark-aggregate" not in text and "<!-- jax-twin:begin -->\nkept" in text
@@ -302,6 +306,7 @@ def test_v2_report_on_synthetic_runs(tmp_path):
     assert "bfs (reference, not ranked)" in text and "| bfs | 10k | n/a |" in text
     assert "| alpha | 0.000 (all equal) ✗ | 0.800 [" in text  # no zero-width "interval"
     assert "270 runs: 3 learners x 3 tasks x 10 seeds x 3 budgets" in text
+    assert "beta at 1000: 1 of 30 runs, up to 1500." in text
     assert "| generated:easy | 1 | 0.700, 0.700 [0.397, 0.892] (7/10) |" in text  # per group
     assert "[BENCHMARKS-v1.md](BENCHMARKS-v1.md)" in text
     assert (tmp_path / "figures" / "bench-v2" / "bench_v2_curves.png").stat().st_size > 0

@@ -160,6 +160,22 @@ def analyse_v2(
                         },
                     }
         per_budget[b] = entry
+    # Runs that used more env steps than the budget they are reported at (a learner that
+    # does not stop at its budget): the page lists them, a same-budget study has none.
+    over: list[dict[str, Any]] = []
+    for lr in learners:
+        if family[lr] == "reference":
+            continue
+        for b in budgets:
+            used = [
+                int(r["result"]["env_steps"])
+                for r in runs
+                if r["spec"]["learner"] == lr and stats.budget_of_run(r) == b
+            ]
+            n_over = sum(u > b for u in used)
+            if n_over:
+                over.append({"learner": lr, "budget": b, "runs": n_over, "of": len(used),
+                             "max_env_steps": max(used)})  # fmt: skip
     means = {b: per_budget[b]["learners"] for b in budgets}
     last = budgets[-1]
     best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
@@ -175,6 +191,7 @@ def analyse_v2(
             "per_budget": per_budget,
             "best": best,
             "headline": head,
+            "over_budget": over,
         }
     )
     return a
@@ -462,6 +479,20 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             *headline_table(a, b),
             f"<!-- {HEADLINE_SECTION}:end -->",
             "",
+        ]
+        if a["over_budget"]:
+            L += [
+                "**Over budget**: these runs used more env steps than the budget they are "
+                "reported at, so their row is not a same-budget comparison: "
+                + "; ".join(
+                    f"{o['learner']} at {fmt_steps(o['budget'])}: {o['runs']} of {o['of']} "
+                    f"runs, up to {fmt_steps(o['max_env_steps'])}"
+                    for o in a["over_budget"]
+                )
+                + ".",
+                "",
+            ]
+        L += [
             "## Score by budget",
             "",
             "Mean SPL [95% stratified-bootstrap CI] of each learner at each budget of the axis "
