@@ -243,8 +243,8 @@ def figures_v2(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
     ax.set_xlabel("environment steps")
     ax.set_ylabel("mean SPL")
     ax.set_title(
-        "Lines: mean SPL of the greedy path along the runs at the largest budget; "
-        "points: final mean SPL at each budget (95% CI)",
+        "Lines: mean SPL along the runs at each learner's largest budget\n"
+        "points: final mean SPL at each budget of the axis (95% CI); dotted: headline budget",
         fontsize=9,
     )
     ax.legend(fontsize=7, loc="upper left")
