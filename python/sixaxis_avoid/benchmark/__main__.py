@@ -7,9 +7,10 @@ python -m sixaxis_avoid.benchmark run --suite v1 --address auto # on a Ray clust
 python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30   # Optuna, tuning tasks only
 python -m sixaxis_avoid.benchmark run --suite v1 --learners ppo --budget-scale 10 \
     --set ppo.lr_schedule=linear --out-dir results/bench/v1-x10-lin  # longer, one change
-python -m sixaxis_avoid.benchmark report --results results/bench/v1
+python -m sixaxis_avoid.benchmark run --suite v2 --budgets 30000,100000   # part of the axis
+python -m sixaxis_avoid.benchmark report --results docs/results/v2   # docs/BENCHMARKS.md (v2)
 python -m sixaxis_avoid.benchmark report --results docs/results/v1 --longer docs/results/v1-x10 \
-    --longer docs/results/v1-x4 --longer docs/results/v1-x10-lin   # docs/BENCHMARKS.md
+    --longer docs/results/v1-x4 --longer docs/results/v1-x10-lin   # docs/BENCHMARKS-v1.md
 python -m sixaxis_avoid.benchmark report --longer-only --results X1 --longer DIR   # sections alone
 """
 
@@ -77,6 +78,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         "--budget-scale", type=float, default=1.0, help="multiply the deep learners' budgets"
     )
     r.add_argument(
+        "--budgets",
+        help="comma list of env-step budgets of the suite's axis (suite v2; default: all)",
+    )
+    r.add_argument(
         "--set",
         action="append",
         default=[],
@@ -103,9 +108,22 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     rep = sub.add_parser("report", help="docs/BENCHMARKS.md and figures from result files")
     rep.add_argument("--results", type=Path, default=Path("results/bench/v1"))
     rep.add_argument(
+        "--suite",
+        help="the study's suite (default: its study.json's); a suite with a budget axis (v2) "
+        "gets the v2 page, which also works before any run (it says the results are pending)",
+    )
+    rep.add_argument(
         "--out",
         type=Path,
-        help="default docs/BENCHMARKS.md (docs/BENCHMARKS_LONGER.md with --longer-only)",
+        help="default docs/BENCHMARKS.md for a suite with a budget axis (v2), "
+        "docs/BENCHMARKS-v1.md for v1 (the history page), docs/BENCHMARKS_LONGER.md with "
+        "--longer-only",
+    )
+    rep.add_argument(
+        "--history",
+        type=Path,
+        default=Path("docs/BENCHMARKS-v1.md"),
+        help="v2 page: the history page it links (default docs/BENCHMARKS-v1.md)",
     )
     rep.add_argument("--figures-dir", type=Path, help="default: OUT's folder / figures/bench")
     rep.add_argument("--reps", type=int, default=2000, help="bootstrap replications")
@@ -147,15 +165,29 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     for name in sets:
         if name not in learners:
             raise SystemExit(f"--set {name}.…: {name!r} is not one of --learners {learners}")
-    specs = runner.plan_runs(
-        suite,
-        learners,
-        seeds=parse_seeds(args.seeds),
-        tasks=tasks,
-        hyperparams=args.hyperparams or suite.raw.get("hyperparams", "v1"),
-        budget_scale=args.budget_scale,
-        overrides=sets,
-    )
+    budgets = None
+    if args.budgets is not None:
+        try:
+            budgets = [int(b) for b in split(args.budgets)]
+        except ValueError:
+            raise SystemExit(
+                f"--budgets: {args.budgets!r}: expected env steps, e.g. 30000,100000"
+            ) from None
+    try:
+        specs = runner.plan_runs(
+            suite,
+            learners,
+            seeds=parse_seeds(args.seeds),
+            tasks=tasks,
+            hyperparams=args.hyperparams or suite.raw.get("hyperparams", "v1"),
+            budget_scale=args.budget_scale,
+            overrides=sets,
+            budgets=budgets,
+        )
+    except ValueError as e:
+        if budgets is None and "axis" not in str(e):
+            raise
+        raise SystemExit(f"--budgets: {e}") from e
     out = args.out_dir or Path("results") / "bench" / suite.name
     print(f"{len(specs)} runs ({len(learners)} learners) -> {out}", file=sys.stderr)
     res = runner.run_study(
@@ -225,9 +257,20 @@ def cmd_list(args: argparse.Namespace) -> int:
         for d in rows:
             print(
                 f"  {label} {d['id']:<22} {d['group']:<18} grid {'x'.join(map(str, d['grid']))}"
-                f", {d['obstacles']} obstacles, optimum {d['optimal_lengths']} moves"
+                f" ({d['states']} states, {d['cell_mm']:g} mm), {d['obstacles']} obstacles, "
+                f"{d['blocked']} blocked cells, optimum {d['optimal_lengths']} moves"
             )
     return 0
+
+
+def has_budget_axis(args: argparse.Namespace) -> bool:
+    """The report's suite (``--suite``, else the study's ``study.json``) has a budget axis."""
+    if args.suite:
+        return "axis" in load_suite(args.suite).budgets
+    manifest = Path(args.results) / "study.json"
+    if not manifest.exists():
+        return False  # the v1 report names the missing file
+    return "axis" in json.loads(manifest.read_text()).get("suite", {}).get("budgets", {})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -244,21 +287,37 @@ def main(argv: list[str] | None = None) -> int:
             return cmd_tune(args, argv)
         if args.cmd == "report":
             from sixaxis_avoid.benchmark.report import write_longer_report, write_report
+            from sixaxis_avoid.benchmark.report_v2 import write_report_v2
 
             try:
-                if args.longer_only:
+                if not args.longer_only and has_budget_axis(args):
+                    args.out = args.out or Path("docs/BENCHMARKS.md")
+                    write_report_v2(
+                        args.results,
+                        args.out,
+                        args.figures_dir,
+                        reps=args.reps,
+                        suite=args.suite,
+                        history=args.history if args.history.exists() else None,
+                    )
+                elif args.longer_only:
                     args.out = args.out or Path("docs/BENCHMARKS_LONGER.md")
                     write_longer_report(
                         args.results, args.longer or [], args.out, args.figures_dir, args.reps
                     )
                 else:
-                    args.out = args.out or Path("docs/BENCHMARKS.md")
+                    # v1 is the history page: its command names its --out, and it links the
+                    # current page (docs/BENCHMARKS.md) when it is not that page itself.
+                    args.out = args.out or Path("docs/BENCHMARKS-v1.md")
+                    current = args.out.parent / "BENCHMARKS.md"
                     write_report(
                         args.results,
                         args.out,
                         args.figures_dir,
                         reps=args.reps,
                         longer=args.longer,
+                        current=current if args.out.name != current.name else None,
+                        out_label=str(args.out),
                     )
             except (ValueError, FileNotFoundError) as e:  # a results directory it cannot use
                 print(f"error: {e}", file=sys.stderr)

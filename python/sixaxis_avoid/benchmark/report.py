@@ -370,6 +370,7 @@ def report_command(a: dict[str, Any]) -> str:
         "python -m sixaxis_avoid.benchmark report --results "
         + a.get("results_dir", f"results/bench/{suite}")
         + "".join(f" --longer {lo['dir']}" for lo in a.get("longer", []))
+        + (f" --out {a['out']}" if a.get("out") else "")
     )
 
 
@@ -489,6 +490,15 @@ def markdown(
         report_command(a),
         "```",
         "",
+        *(
+            [
+                f"This is the history page of suite {suite['name']}; the current benchmark is "
+                f"[{Path(a['current']).name}]({os.path.relpath(a['current'], out_path.parent)}).",
+                "",
+            ]
+            if a.get("current")
+            else []
+        ),
         f"Suite **{suite['name']}** version {suite['version']}: {suite.get('description', '')} "
         f"{len(a['tasks'])} tasks x {len(a['seeds'])} seeds x {len(learners)} learners = "
         f"{len(a['runs'])} runs, each a Ray task ({m['ray']}). {provenance(m)}; the runs took "
@@ -626,12 +636,13 @@ def longer_figures(longer: list[dict[str, Any]], figures_dir: Path) -> dict[str,
 _SECTION = re.compile(r"<!-- ([\w.-]+):begin -->\n.*?<!-- \1:end -->", re.S)
 
 
-def keep_other_sections(out: Path, text: str) -> str:
+def keep_other_sections(out: Path, text: str, exclude: set[str] | None = None) -> str:
     """``text`` with the marked sections of the old ``out`` that other scripts own (markers
-    as in scripts/docsections.py, e.g. ``jax-twin``) appended, so a regeneration keeps them."""
+    as in scripts/docsections.py, e.g. ``jax-twin``) appended, so a regeneration keeps them
+    (but those in ``exclude``: sections that moved to another page)."""
     if not out.exists():
         return text
-    mine = {m.group(1) for m in _SECTION.finditer(text)}
+    mine = {m.group(1) for m in _SECTION.finditer(text)} | set(exclude or ())
     kept = [m.group(0) for m in _SECTION.finditer(out.read_text()) if m.group(1) not in mine]
     return text.rstrip("\n") + "".join(f"\n\n{k}" for k in kept) + "\n"
 
@@ -642,14 +653,21 @@ def write_report(
     figures_dir: Path | None = None,
     reps: int = stats.REPS,
     longer: Path | list[Path] | None = None,
+    current: Path | None = None,
+    out_label: str | None = None,
 ) -> dict[str, Any]:
     """Write the report ``out`` and its figures from the study in ``results``; with
     ``longer``, a second study of the same suite at a larger ``--budget-scale`` is set beside
-    it (section *Longer budgets*)."""
+    it (section *Longer budgets*). ``current``: the page of the current benchmark, when this
+    one is a history page (it links it); ``out_label``: the ``--out`` its command names."""
     results, out = Path(results), Path(out)
     figures_dir = Path(figures_dir) if figures_dir else out.parent / "figures" / "bench"
     a = analyse(results, reps)
     a["results_dir"] = str(results)
+    if current is not None:
+        a["current"] = str(current)
+    if out_label:
+        a["out"] = out_label
     figs = figures(a, figures_dir)
     dirs = [longer] if isinstance(longer, (str, Path)) else list(longer or [])
     a["longer"] = [analyse_longer(a, Path(d), reps) for d in dirs]

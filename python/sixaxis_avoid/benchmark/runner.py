@@ -65,10 +65,16 @@ def numerics() -> dict[str, Any]:
 # Specs
 
 
-def budget_of(suite: Suite, family: str, task: Task, scale: float = 1.0) -> dict[str, Any]:
-    """A run's budget: env steps (and the native learner's episode cap)."""
+def budget_of(
+    suite: Suite, family: str, task: Task, scale: float = 1.0, env_steps: int | None = None
+) -> dict[str, Any]:
+    """A run's budget: env steps (and the native learner's episode cap); ``env_steps``: a
+    budget of the suite's axis (``budgets.axis``, suite v2), the same for every family."""
     b = {**suite.budgets, **task.spec.get("budgets", {})}
-    deep = int(b["deep_goal"] if task.is_goal and "deep_goal" in b else b["deep"])
+    if env_steps is not None:
+        deep = int(env_steps)
+    else:
+        deep = int(b["deep_goal"] if task.is_goal and "deep_goal" in b else b["deep"])
     deep = max(1, round(deep * scale))
     if family == "native":
         native = {"episodes": int(b.get("native_episodes", 10_000))}
@@ -89,19 +95,61 @@ def plan_runs(
     budget_scale: float = 1.0,
     overrides: dict[str, dict[str, Any]] | None = None,
     tag: str | None = None,
+    budgets: list[int] | None = None,
 ) -> list[dict[str, Any]]:
     """The specs of a study's runs: learners x tasks x seeds (``tag`` prefixes their result
-    files, e.g. a tuning trial's number)."""
+    files, e.g. a tuning trial's number); on a suite with a budget axis (``budgets.axis``),
+    x budgets (``budgets``: a subset of the axis, default all of it), each run's
+    ``budget`` one of them."""
+    axis = suite.budgets.get("axis")
+    if budgets is not None and axis is None:
+        raise ValueError(f"budgets {budgets}: suite {suite.name!r} has no budget axis")
+    chosen: list[int | None] = [None]
+    if axis is not None:
+        chosen = [int(b) for b in (axis if budgets is None else budgets)]
+        for b in chosen:
+            if b not in axis:
+                raise ValueError(f"budgets: {b} is not on suite {suite.name!r}'s axis {axis}")
+    specs = []
+    for axis_budget in chosen:
+        specs += _plan_at(
+            suite, learners, seeds, tasks, hyperparams, budget_scale, overrides, tag, axis_budget
+        )
+    return specs
+
+
+def _plan_at(
+    suite: Suite,
+    learners: list[str],
+    seeds: list[int] | None,
+    tasks: list[Task] | None,
+    hyperparams: str | Path,
+    budget_scale: float,
+    overrides: dict[str, dict[str, Any]] | None,
+    tag: str | None,
+    axis_budget: int | None,
+) -> list[dict[str, Any]]:
     hp_file = hpmod.load(hyperparams)
     specs = []
     for learner in learners:
         cls = resolve(learner)
         family = family_of(cls)
         values = hpmod.values_for(hp_file, learner, dict(getattr(cls, "defaults", {})))
+        status = "n/a" if family != "deep" else hpmod.status_for(hp_file, learner)
+        if axis_budget is not None:
+            # A run at budget B takes the values tuned at B (the file's ``by_budget``), never
+            # those of another budget: without them it runs with defaults, "untuned".
+            entry = hp_file.get("learners", {}).get(learner, {}).get("by_budget", {})
+            at = entry.get(str(axis_budget))
+            values = {**dict(getattr(cls, "defaults", {})), **((at or {}).get("values", {}))}
+            if at is not None:
+                status = str(at.get("status", "tuned"))
+            elif family == "deep":
+                status = "untuned"
         values.update(suite.raw.get("overrides", {}).get(learner, {}))
         values.update((overrides or {}).get(learner, {}))
         for task in tasks if tasks is not None else suite.tasks:
-            budget = budget_of(suite, family, task, budget_scale)
+            budget = budget_of(suite, family, task, budget_scale, env_steps=axis_budget)
             hp = {**values, **budget.get("native", {})}
             cap = suite.algorithm2.get(family, suite.algorithm2["deep"])
             for seed in seeds if seeds is not None else suite.seeds:
@@ -119,11 +167,11 @@ def plan_runs(
                         if family != "reference"
                         else [],
                         "hyperparams": hp,
-                        "hyperparams_status": "n/a"
-                        if family != "deep"
-                        else hpmod.status_for(hp_file, learner),
+                        "hyperparams_status": status,
                         "max_replans": int(cap),
                         **({"tag": tag} if tag else {}),
+                        # The axis budget this run belongs to (BFS's own budget is 0).
+                        **({"budget_axis": axis_budget} if axis_budget is not None else {}),
                     }
                 )
     return specs
@@ -135,6 +183,8 @@ def spec_hash(spec: dict[str, Any]) -> str:
 
 def run_key(spec: dict[str, Any]) -> str:
     raw = f"{spec['task']['id']}__{spec['learner']}__s{spec['seed']}"
+    if spec.get("budget_axis"):  # a run of a suite's budget axis: one file per budget
+        raw = f"{raw}__b{spec['budget_axis']}"
     if spec.get("tag"):
         raw = f"{spec['tag']}__{raw}"
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", raw)

@@ -241,3 +241,176 @@ def plateau(runs: list[dict[str, Any]], learners: list[str]) -> dict[str, dict[s
                 "fell_from_best": float(m[5]),
             }
     return out
+
+
+# ------------------------------------------------------------------------------------------
+# Benchmark v2: statistics that fit near-binary outcomes (docs/BENCHMARKS.md, "Statistics")
+
+#: IQM is shown only when fewer than this fraction of the scores are exactly 0 or 1: with
+#: more, the middle half of the sorted scores is mostly zeros and ones and the IQM is a
+#: stretched copy of the mean (about clip((mean - 0.25) / 0.5, 0, 1)), not a robust centre.
+IQM_DEGENERATE_FRACTION = 0.75
+
+#: The SPL a run must reach for "env steps to SPL >= 0.95".
+SPL_REACHED = 0.95
+
+#: z of a two-sided 95% interval.
+Z95 = 1.959963984540054
+
+
+def wilson(successes: int, trials: int, z: float = Z95) -> dict[str, float]:
+    """Wilson score interval of a binomial proportion (95% by default): the success rate
+    ``successes / trials`` with bounds that stay inside [0, 1] and do not collapse to a
+    point at 0 or 1 (as the normal approximation does)."""
+    if trials < 1 or not 0 <= successes <= trials:
+        raise ValueError(f"wilson: successes {successes} of trials {trials}")
+    p = successes / trials
+    z2 = z * z
+    centre = (p + z2 / (2 * trials)) / (1 + z2 / trials)
+    half = z / (1 + z2 / trials) * np.sqrt(p * (1 - p) / trials + z2 / (4 * trials * trials))
+    return {
+        "rate": p,
+        "lo": 0.0 if successes == 0 else max(0.0, float(centre - half)),
+        "hi": 1.0 if successes == trials else min(1.0, float(centre + half)),
+        "successes": int(successes),
+        "trials": int(trials),
+    }
+
+
+def success_count(runs: list[dict[str, Any]]) -> tuple[int, int]:
+    """Successes out of trials over runs: each run counts one trial per evaluation target
+    (its ``result.success`` is the fraction of its targets reached)."""
+    k = n = 0
+    for r in runs:
+        m = len(r["result"]["optimal_lengths"])
+        k += round(float(r["result"]["success"]) * m)
+        n += m
+    return k, n
+
+
+def degenerate_fraction(x: np.ndarray) -> float:
+    """The fraction of the scores that are exactly 0 or 1."""
+    x = np.asarray(x, dtype=float).ravel()
+    return float(np.mean((x == 0.0) | (x == 1.0))) if x.size else 1.0
+
+
+def iqm_shown(x: np.ndarray) -> bool:
+    """IQM is meaningful for these scores (see :data:`IQM_DEGENERATE_FRACTION`)."""
+    return degenerate_fraction(x) < IQM_DEGENERATE_FRACTION
+
+
+def budget_of_run(r: dict[str, Any]) -> int:
+    """The budget of the axis a run belongs to (``spec.budget_axis``; else its budget)."""
+    return int(r["spec"].get("budget_axis") or r["spec"]["budget"])
+
+
+def steps_to(curve: list[dict[str, Any]], level: float = SPL_REACHED) -> int | None:
+    """Env steps of the first checkpoint whose score is >= ``level`` (None: never)."""
+    for p in curve:
+        if p["score"] >= level - 1e-12:
+            return int(p["env_steps"])
+    return None
+
+
+def kaplan_meier(times: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The Kaplan-Meier survival curve: event times and S just after each (a run
+    "survives" until it reaches the level; censored runs never did within their budget)."""
+    times = np.asarray(times, dtype=float)
+    observed = np.asarray(observed, dtype=bool)
+    ts = np.unique(times[observed])
+    s, out = 1.0, []
+    for t in ts:
+        at_risk = np.sum(times >= t)
+        events = np.sum((times == t) & observed)
+        s *= 1.0 - events / at_risk
+        out.append(s)
+    return ts, np.array(out)
+
+
+def km_median(times: np.ndarray, observed: np.ndarray) -> float | None:
+    """The Kaplan-Meier median: the first event time where S <= 1/2 (None: half the runs or
+    more never reached the level within their budget, the median is beyond it)."""
+    ts, s = kaplan_meier(times, observed)
+    hit = np.flatnonzero(s <= 0.5 + 1e-12)
+    return float(ts[hit[0]]) if hit.size else None
+
+
+def steps_to_level(
+    runs: list[dict[str, Any]], level: float = SPL_REACHED, seed: int = 0, reps: int = REPS
+) -> dict[str, Any]:
+    """Env steps to SPL >= ``level`` over runs, censored at each run's budget: the
+    Kaplan-Meier median with a 95% interval from a bootstrap of the runs stratified by task
+    (percentiles; a bound is None where the resampled median lies beyond the budget), and the
+    fraction of runs that reached it."""
+    times, observed, strata = [], [], []
+    for r in runs:
+        t = steps_to(r["result"]["curve"], level)
+        observed.append(t is not None)
+        times.append(t if t is not None else r["result"]["env_steps"] or r["spec"]["budget"])
+        strata.append(r["spec"]["task"]["id"])
+    times_a, obs_a = np.array(times, dtype=float), np.array(observed, dtype=bool)
+    if not len(times_a):
+        return {"runs": 0, "reached": 0, "median": None, "ci": [None, None]}
+    rng = np.random.default_rng(seed)
+    groups = [np.flatnonzero(np.array(strata) == g) for g in dict.fromkeys(strata)]
+    meds = []
+    for _ in range(reps):
+        idx = np.concatenate([rng.choice(g, size=len(g), replace=True) for g in groups])
+        m = km_median(times_a[idx], obs_a[idx])
+        meds.append(np.inf if m is None else m)
+    lo, hi = np.percentile(meds, [2.5, 97.5], method="lower")
+    return {
+        "runs": len(times_a),
+        "reached": int(obs_a.sum()),
+        "median": km_median(times_a, obs_a),
+        "ci": [None if np.isinf(lo) else float(lo), None if np.isinf(hi) else float(hi)],
+    }
+
+
+def mean_ci(scores: np.ndarray, seed: int = 0, reps: int = REPS) -> tuple[float, list[float]]:
+    """Mean of (runs, tasks) scores with its 95% stratified-bootstrap interval (rliable;
+    tasks as strata)."""
+    from rliable import metrics
+
+    rly = rliable_library()
+    seeded(seed)
+    point, ci = rly.get_interval_estimates(
+        {"x": np.asarray(scores, dtype=float)},
+        lambda x: np.array([metrics.aggregate_mean(x)]),
+        reps=reps,
+    )
+    return float(point["x"][0]), [float(ci["x"][0][0]), float(ci["x"][1][0])]
+
+
+def headline_budget(
+    by_budget: dict[int, dict[str, dict[str, Any]]], best: list[str]
+) -> dict[str, Any]:
+    """The headline budget of an axis: the smallest budget at which every learner of
+    ``best`` has plateaued, i.e. its mean SPL at the next budget of the axis lies inside its
+    95% interval at this one. ``by_budget[B][learner]`` holds ``mean`` and ``mean_ci``. With
+    no such budget, the largest (``plateaued`` False: the plateau is not shown)."""
+    budgets = sorted(by_budget)
+    checks = []
+    for b, nxt in zip(budgets, budgets[1:]):
+        rows = {}
+        for lr in best:
+            here, there = by_budget[b].get(lr), by_budget[nxt].get(lr)
+            if here is None or there is None:
+                rows[lr] = None
+                continue
+            lo, hi = here["mean_ci"]
+            rows[lr] = bool(lo - 1e-12 <= there["mean"] <= hi + 1e-12)
+        checks.append({"budget": b, "next": nxt, "within": rows})
+        if rows and all(v is True for v in rows.values()):
+            return {"budget": b, "plateaued": True, "checks": checks, "best": list(best)}
+    return {"budget": budgets[-1], "plateaued": False, "checks": checks, "best": list(best)}
+
+
+def best_learners(rows: dict[str, dict[str, Any]]) -> list[str]:
+    """The learners whose mean SPL interval overlaps that of the top learner (by mean):
+    those the data cannot tell from the best."""
+    if not rows:
+        return []
+    top = max(rows, key=lambda lr: rows[lr]["mean"])
+    lo_top = rows[top]["mean_ci"][0]
+    return [lr for lr in rows if rows[lr]["mean_ci"][1] >= lo_top - 1e-12]

@@ -22,10 +22,21 @@ A task is one of
   (reachable free cells drawn with ``target_seed``). Deep learners train one policy on goal
   observations for every target; the tabular learner is re-learned per target and its cost
   (env steps, seconds) is summed.
+
+Any task may carry ``"cell_mm": 50`` (or 25, ...): its scenario is re-gridded to cells of that
+size (``Scenario.regrid``, docs/SCENARIOS.md): the same physical world on a finer grid, with
+more states and longer paths.
+
+Two reported tasks must not be the same world for a learner (:meth:`Task.learner_world`, a key
+of what the grid learner sees): suites of version 2 and later are checked when they are
+loaded (:meth:`Suite.check_distinct_worlds`). Suite v1 predates the check: its
+``paper_simple`` and ``paper_complex`` differ only in the arm's safe distance and in a
+terminal safe distance (0.96 against 0.95 cells) that blocks the same cells.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -56,12 +67,16 @@ class Task:
 
     @property
     def group(self) -> str:
-        """Paper, generated:LEVEL or goal: the rows the report groups by."""
+        """Paper, shipped, generated:LEVEL or goal, with ``@50mm`` for a re-gridded task:
+        the rows the report groups by."""
         if self.kind == "generated":
-            return f"generated:{self.spec.get('level', 'default')}"
-        if self.kind == "goal":
-            return "goal"
-        return "paper" if str(self.spec["scenario"]).startswith("paper_") else "shipped"
+            base = f"generated:{self.spec.get('level', 'default')}"
+        elif self.kind == "goal":
+            base = "goal"
+        else:
+            base = "paper" if str(self.spec["scenario"]).startswith("paper_") else "shipped"
+        cell_mm = self.spec.get("cell_mm")
+        return base if cell_mm is None else f"{base}@{float(cell_mm):g}mm"
 
     @cached_property
     def scenario(self) -> Any:
@@ -71,8 +86,50 @@ class Task:
             opts = dict(self.spec.get("options", {}))
             if "bounds" in opts:
                 opts["bounds"] = tuple(tuple(b) for b in opts["bounds"])
-            return sa.generate_scenario(int(self.spec["seed"]), **opts)
-        return sa.Scenario(self.spec["scenario"])
+            s = sa.generate_scenario(int(self.spec["seed"]), **opts)
+        else:
+            s = sa.Scenario(self.spec["scenario"])
+        cell_mm = self.spec.get("cell_mm")
+        if cell_mm is not None:
+            try:
+                s = s.regrid(float(cell_mm))
+            except (TypeError, ValueError) as e:
+                raise SuiteError(f"task {self.id!r}: cell_mm {cell_mm!r}: {e}") from e
+        return s
+
+    @cached_property
+    def blocked_states(self) -> np.ndarray:
+        """The states (the core's numbering) where the terminal collides, as the core's grid
+        world computes them, see
+        docs/SCENARIOS.md, "The grid world: states, actions, collisions, rewards"."""
+        from sixaxis_avoid import _core
+
+        return np.flatnonzero(np.asarray(_core.EnvCore(self.scenario, obs="index").blocked))
+
+    @cached_property
+    def learner_world(self) -> str:
+        """What a learner of the grid sees, as a key (two tasks with equal keys are the same
+        task for every learner of the benchmark): the bounds, the blocked cells (the
+        obstacles as the terminal's safe distance makes them, boxes in mm included, as the
+        core computes them), the start, the evaluation targets, whether the target changes
+        every episode (goal task), the episode's step cap, the reward parameters and the
+        learning block but its seed (each run sets its own). The arm, the cell size in mm
+        and the planning settings are left out: they reach Algorithms 1 and 2, not the
+        learner."""
+        s = self.scenario
+        doc = json.loads(s.to_json())
+        blocked = self.blocked_states
+        learning = {k: v for k, v in doc["learning"].items() if k != "seed"}
+        key = {
+            "bounds": doc["bounds"],
+            "blocked_states": blocked.tolist(),
+            "start": list(s.start),
+            "targets": sorted(list(t) for t in self.eval_targets),
+            "goal": self.is_goal,
+            "rewards": doc["rewards"],
+            "learning": learning,
+        }
+        return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
 
     @cached_property
     def eval_targets(self) -> list[tuple[int, int, int]]:
@@ -131,14 +188,19 @@ class Task:
         s = self.scenario
         lo, hi = s.bounds
         size = [int(h - low + 1) for low, h in zip(lo, hi)]
+        # A re-gridded world holds its obstacles as boxes in mm: count both.
+        n_obs = len(s.obstacles) + len(json.loads(s.to_json()).get("obstacle_boxes_mm") or [])
         return {
             "id": self.id,
             "kind": self.kind,
             "group": self.group,
             "spec": self.spec,
             "grid": size,
-            "obstacles": len(s.obstacles),
-            "density": round(len(s.obstacles) / float(np.prod(size)), 3),
+            "states": int(np.prod(size)),
+            "cell_mm": float(s.cell_mm),
+            "obstacles": n_obs,
+            "blocked": len(self.blocked_states),
+            "density": round(n_obs / float(np.prod(size)), 3),
             "start": list(s.start),
             "targets": [list(t) for t in self.eval_targets],
             "optimal_lengths": self.optimal_lengths,
@@ -167,14 +229,40 @@ class Suite:
     def tuning_tasks(self) -> list[Task]:
         return [_task(x, f"tuning.tasks[{i}]") for i, x in enumerate(self.tuning.get("tasks", []))]
 
+    @property
+    def major_version(self) -> int:
+        """The suite's version as a number (``"2"``, ``"2.1"`` -> 2)."""
+        try:
+            return int(str(self.version).split(".")[0])
+        except ValueError as e:
+            raise SuiteError(
+                f"suite {self.name!r}: version {self.version!r} is not a number"
+            ) from e
+
     def check_disjoint(self) -> None:
-        """Tuning tasks share no world with the reported ones."""
+        """Tuning tasks share no world with the reported ones (neither the same scenario nor
+        the same learner world, :attr:`Task.learner_world`)."""
         reported = {t.scenario.to_json(): t.id for t in self.tasks}
+        worlds = {t.learner_world: t.id for t in self.tasks}
         for t in self.tuning_tasks:
-            if t.scenario.to_json() in reported:
+            same = reported.get(t.scenario.to_json()) or worlds.get(t.learner_world)
+            if same is not None:
                 raise SuiteError(
                     f"suite {self.name!r}: tuning task {t.id!r} is the reported task "
-                    f"{reported[t.scenario.to_json()]!r}; tuning tasks must be disjoint"
+                    f"{same!r}; tuning tasks must be disjoint"
+                )
+
+    def check_distinct_worlds(self) -> None:
+        """No two reported tasks are the same learner world (:attr:`Task.learner_world`):
+        a duplicate would count one task twice in every aggregate."""
+        seen: dict[str, str] = {}
+        for t in self.tasks:
+            other = seen.setdefault(t.learner_world, t.id)
+            if other != t.id:
+                raise SuiteError(
+                    f"suite {self.name!r}: tasks {other!r} and {t.id!r} are the same learner "
+                    "world (bounds, blocked cells, start, targets, step cap, rewards and "
+                    "learning settings); keep one"
                 )
 
     def checkpoints(self, budget: int) -> list[int]:
@@ -235,4 +323,7 @@ def load_suite(name_or_path: str | Path) -> Suite:
         path=p,
         raw=raw,
     )
+    if suite.major_version >= 2:
+        suite.check_distinct_worlds()
+        suite.check_disjoint()
     return suite

@@ -1,0 +1,680 @@
+"""docs/BENCHMARKS.md for a suite with a budget axis (suite v2), from its result files.
+
+``python -m sixaxis_avoid.benchmark report --results docs/results/v2`` reads ``study.json``
+and ``runs/*.json`` (one run per learner, task, seed and budget of the axis) and writes one
+page: the headline at the headline budget (the smallest budget of the axis at which the best
+learners have plateaued, shown with the score of every learner at every budget), success
+rates with Wilson intervals, SPL with stratified-bootstrap intervals, IQM where it is not
+degenerate, per-task tables, all learners' curves on one env-steps axis, performance
+profiles, probability of improvement, env steps to SPL >= 0.95 (censored at the budget), the
+tuning record per learner and budget, and a link to the history (v1's page). Without result
+files yet, the page says so and shows the suite, the tuning record and the commands.
+
+The statistics are in :mod:`sixaxis_avoid.benchmark.stats` (section "Benchmark v2").
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sixaxis_avoid.benchmark import hyperparams as hpmod
+from sixaxis_avoid.benchmark import stats
+from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
+from sixaxis_avoid.benchmark.runner import load_runs
+from sixaxis_avoid.benchmark.tasks import Suite, load_suite
+
+#: Learners reported as the paper's reproduction, outside the ranking (docs/BENCHMARKS.md).
+REPRODUCTION = ("q_paper",)
+
+#: The README's copy of the headline (scripts/docsections.py).
+HEADLINE_SECTION = "benchmark-headline"
+
+
+def fmt_steps(v: Any) -> str:
+    if v is None:
+        return "—"
+    v = float(v)
+    if v >= 1e6:
+        return f"{v / 1e6:.2f}M"
+    if v >= 1e4:
+        return f"{v / 1e3:.0f}k"
+    return f"{v:.0f}"
+
+
+def fmt_ci(point: float, ci: list[float], digits: int = 3) -> str:
+    """``0.800 [0.733, 0.867]``; a zero-width interval (every resample the same: all runs
+    scored alike) reads ``1.000 (all equal)``, not as certainty."""
+    if ci[1] - ci[0] < 10.0 ** (-digits - 2):
+        return f"{point:.{digits}f} (all equal)"
+    return f"{point:.{digits}f} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+
+
+def fmt_wilson(w: dict[str, Any]) -> str:
+    return f"{w['rate']:.3f} [{w['lo']:.3f}, {w['hi']:.3f}] ({w['successes']}/{w['trials']})"
+
+
+def fmt_steps_to(s: dict[str, Any], budget: int) -> str:
+    """``42k [30k, 61k] (27/30 reached)``; a median or bound beyond the budget reads
+    ``> budget``."""
+    if not s["runs"]:
+        return "—"
+
+    def one(v: float | None) -> str:
+        return f"> {fmt_steps(budget)}" if v is None else fmt_steps(v)
+
+    lo, hi = s["ci"]
+    return f"{one(s['median'])} [{one(lo)}, {one(hi)}] ({s['reached']}/{s['runs']} reached)"
+
+
+# ------------------------------------------------------------------------------------------
+# Analysis
+
+
+def analyse_v2(
+    results: Path, suite: Suite | str | None = None, reps: int = stats.REPS
+) -> dict[str, Any]:
+    """Everything the v2 page shows, from the result files in ``results`` (none: pending)."""
+    results = Path(results)
+    manifest_path = results / "study.json"
+    manifest = json.loads(manifest_path.read_text()) if manifest_path.exists() else None
+    if suite is None:
+        if manifest is None:
+            raise ValueError(f"{results}: no study.json; give the suite (--suite)")
+        suite = manifest["suite"]["name"]
+    suite = load_suite(suite) if not isinstance(suite, Suite) else suite
+    if "axis" not in suite.budgets:
+        raise ValueError(f"suite {suite.name!r} has no budget axis: use the v1 report")
+    runs = load_runs(results) if (results / "runs").is_dir() else []
+    runs = [r for r in runs if r["spec"]["suite"] == suite.name]
+    a: dict[str, Any] = {
+        "suite": suite,
+        "manifest": manifest,
+        "results_dir": str(results),
+        "runs": runs,
+        "reps": reps,
+        "axis": [int(b) for b in suite.budgets["axis"]],
+    }
+    if not runs:
+        a["pending"] = True
+        return a
+    a["pending"] = False
+    order = list((manifest or {}).get("learners", []))
+    learners = list(dict.fromkeys([*order, *(r["spec"]["learner"] for r in runs)]))
+    learners = [lr for lr in learners if any(r["spec"]["learner"] == lr for r in runs)]
+    suite_ids = [t.id for t in suite.tasks]
+    present = {r["spec"]["task"]["id"] for r in runs}
+    tasks = [t for t in suite_ids if t in present]
+    family = {r["spec"]["learner"]: r["spec"]["family"] for r in runs}
+    reference = [lr for lr in learners if family[lr] == "reference"]
+    reproduction = [lr for lr in learners if lr in REPRODUCTION]
+    ranked = [lr for lr in learners if lr not in reference and lr not in reproduction]
+    budgets = sorted({stats.budget_of_run(r) for r in runs})
+    per_budget: dict[int, dict[str, Any]] = {}
+    for b in budgets:
+        at = [r for r in runs if stats.budget_of_run(r) == b]
+        have = {(r["spec"]["learner"], r["spec"]["task"]["id"]) for r in at}
+        complete = [lr for lr in learners if all((lr, t) in have for t in tasks)]
+        entry: dict[str, Any] = {"learners": {}, "complete": complete, "seeds": []}
+        if complete:
+            scores, seeds = stats.score_matrices(at, complete, tasks)
+            entry["seeds"] = seeds
+            if seeds:
+                agg = stats.aggregates(
+                    scores, reps=reps, poi_exclude=tuple(reference + reproduction)
+                )
+                entry["agg"] = agg
+                for lr in complete:
+                    mine = [
+                        r for r in at if r["spec"]["learner"] == lr and r["spec"]["seed"] in seeds
+                    ]
+                    g = agg["learners"][lr]
+                    k, n = stats.success_count(mine)
+                    entry["learners"][lr] = {
+                        "runs": len(mine),
+                        "mean": g["mean"],
+                        "mean_ci": g["mean_ci"],
+                        "iqm": g["iqm"],
+                        "iqm_ci": g["iqm_ci"],
+                        "degenerate": stats.degenerate_fraction(scores[lr]),
+                        "iqm_shown": stats.iqm_shown(scores[lr]),
+                        "success": stats.wilson(k, n),
+                        "steps_to": stats.steps_to_level(mine, reps=max(reps // 4, 100))
+                        if family[lr] != "reference"
+                        else None,
+                        "status": sorted(
+                            {r["spec"].get("hyperparams_status", "n/a") for r in mine}
+                        ),
+                        "per_task": {
+                            t: {
+                                "mean": float(np.mean(scores[lr][:, j])),
+                                "success": stats.success_count(
+                                    [r for r in mine if r["spec"]["task"]["id"] == t]
+                                ),
+                            }
+                            for j, t in enumerate(tasks)
+                        },
+                    }
+        per_budget[b] = entry
+    # Runs that used more env steps than the budget they are reported at (a learner that
+    # does not stop at its budget): the page lists them, a same-budget study has none.
+    over: list[dict[str, Any]] = []
+    for lr in learners:
+        if family[lr] == "reference":
+            continue
+        for b in budgets:
+            used = [
+                int(r["result"]["env_steps"])
+                for r in runs
+                if r["spec"]["learner"] == lr and stats.budget_of_run(r) == b
+            ]
+            n_over = sum(u > b for u in used)
+            if n_over:
+                over.append({"learner": lr, "budget": b, "runs": n_over, "of": len(used),
+                             "max_env_steps": max(used)})  # fmt: skip
+    means = {b: per_budget[b]["learners"] for b in budgets}
+    last = budgets[-1]
+    best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
+    head = stats.headline_budget(means, best) if best else None
+    a.update(
+        {
+            "learners": learners,
+            "ranked": ranked,
+            "reference": reference,
+            "reproduction": reproduction,
+            "tasks": tasks,
+            "budgets": budgets,
+            "per_budget": per_budget,
+            "best": best,
+            "headline": head,
+            "over_budget": over,
+        }
+    )
+    return a
+
+
+# ------------------------------------------------------------------------------------------
+# Figures
+
+
+def figures_v2(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
+    """Two figures: every learner's mean curve (its runs at the largest budget) and its final
+    score at each budget of the axis on one env-steps axis; performance profiles at the
+    headline budget."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sixaxis_avoid.benchmark.report import COLORS
+
+    out: dict[str, Path] = {}
+    learners = [lr for lr in a["learners"] if lr not in a["reference"]]
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    top = max(a["budgets"])
+    grid = np.unique(np.geomspace(max(1, top // 1000), top, 60).round())
+    for i, lr in enumerate(learners):
+        color = COLORS.get(lr, f"C{i % 10}")
+        mine = [r for r in a["runs"] if r["spec"]["learner"] == lr]
+        if not mine:
+            continue
+        b_max = max(stats.budget_of_run(r) for r in mine)
+        longest = [r for r in mine if stats.budget_of_run(r) == b_max and r["result"]["curve"]]
+        if longest:
+            g = grid[grid <= b_max]
+            ys = np.mean([stats.curve_on(g, r["result"]["curve"]) for r in longest], axis=0)
+            ax.plot(g, ys, color=color, label=f"{lr} (curve at {fmt_steps(b_max)})")
+        pts = [(b, e["learners"][lr]) for b, e in a["per_budget"].items() if lr in e["learners"]]
+        if pts:
+            xs = [b for b, _ in pts]
+            ys = [v["mean"] for _, v in pts]
+            err = np.array(
+                [[v["mean"] - v["mean_ci"][0], v["mean_ci"][1] - v["mean"]] for _, v in pts]
+            )
+            ax.errorbar(xs, ys, yerr=err.T, fmt="o", color=color, capsize=3, markersize=4)
+    if a["headline"]:
+        ax.axvline(a["headline"]["budget"], color="gray", linestyle=":", linewidth=1)
+    ax.set_xscale("log")
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("mean SPL")
+    ax.set_title(
+        "Lines: mean SPL along the runs at each learner's largest budget\n"
+        "points: final mean SPL at each budget of the axis (95% CI); dotted: headline budget",
+        fontsize=9,
+    )
+    ax.legend(fontsize=7, loc="upper left")
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    out["curves"] = out_dir / "bench_v2_curves.png"
+    atomic_savefig(fig, out["curves"])
+    plt.close(fig)
+
+    b = a["headline"]["budget"] if a["headline"] else max(a["budgets"])
+    agg = a["per_budget"][b].get("agg")
+    if agg:
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        taus = np.asarray(agg["taus"])
+        for i, lr in enumerate(agg["learners"]):
+            s = agg["learners"][lr]
+            color = COLORS.get(lr, f"C{i % 10}")
+            ax.plot(taus, s["profile"], color=color, label=lr)
+            ax.fill_between(taus, *s["profile_ci"], color=color, alpha=0.15, linewidth=0)
+        ax.set_xlabel(r"SPL threshold $\tau$")
+        ax.set_ylabel(r"fraction of runs with SPL > $\tau$")
+        ax.set_title(f"Performance profiles at {fmt_steps(b)} env steps (95% CI band)")
+        ax.legend(fontsize=8)
+        ax.grid(True, alpha=0.3)
+        fig.tight_layout()
+        out["profiles"] = out_dir / "bench_v2_profiles.png"
+        atomic_savefig(fig, out["profiles"])
+        plt.close(fig)
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# Markdown
+
+
+def report_command_v2(a: dict[str, Any], out: Path) -> str:
+    return (
+        f"python -m sixaxis_avoid.benchmark report --suite {a['suite'].name} "
+        f"--results {a['results_dir']} --out {out}"
+    )
+
+
+def tuning_rows(a: dict[str, Any]) -> list[str]:
+    """The tuning record per learner and budget (``by_budget`` of the hyperparameter file),
+    beside the status the runs recorded."""
+    hp_name = a["suite"].raw.get("hyperparams", a["suite"].name)
+    data = hpmod.load(hp_name)
+    learners = list(
+        dict.fromkeys([*data.get("learners", {}), *[lr for lr in a.get("learners", [])]])
+    )
+    recorded: dict[tuple[str, int], set[str]] = {}
+    for r in a["runs"]:
+        key = (r["spec"]["learner"], stats.budget_of_run(r))
+        recorded.setdefault(key, set()).add(r["spec"].get("hyperparams_status", "n/a"))
+    out = [
+        f"Hyperparameter file: `{os.path.relpath(data['path'])}`"
+        + ("" if Path(data["path"]).exists() else " (not written yet: no learner is tuned)")
+        + ". A run at budget B takes the values tuned at B; without them it runs with the "
+        "learner's defaults and is marked **untuned** (never values tuned at another budget).",
+        "",
+        "| learner | budget | status | trials | objective | status in the run files |",
+        "|---|---|---|---|---|---|",
+    ]
+    for lr in learners:
+        by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
+        for b in a["axis"]:
+            e = by.get(str(b))
+            statuses = recorded.get((lr, b), set())
+            runs = ", ".join(sorted(statuses)) or "no runs"
+            if e is None:
+                # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".
+                status = "n/a" if statuses == {"n/a"} else "**untuned**"
+                out.append(f"| {lr} | {fmt_steps(b)} | {status} | — | — | {runs} |")
+                continue
+            obj = e.get("objective")
+            obj_s = f"{obj:.3f}" if isinstance(obj, (int, float)) else str(obj or "—")
+            trials = f"`{e['trials']}`" if e.get("trials") else "—"
+            out.append(
+                f"| {lr} | {fmt_steps(b)} | {e.get('status', 'tuned')} | {trials} | {obj_s} "
+                f"| {runs} |"
+            )
+    if not learners:
+        out.append("| (none yet) | — | **untuned** | — | — | — |")
+    return out
+
+
+def tasks_rows(suite: Suite) -> list[str]:
+    out = [
+        "| task | group | grid | states | cell (mm) | blocked cells | targets | "
+        "BFS optimum (moves) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for t in suite.tasks:
+        d = t.describe()
+        out.append(
+            f"| {t.id} | {d['group']} | {'x'.join(map(str, d['grid']))} | {d['states']} | "
+            f"{d['cell_mm']:g} | {d['blocked']} | {len(d['targets'])} | "
+            f"{', '.join(map(str, d['optimal_lengths']))} |"
+        )
+    return out
+
+
+STATISTICS = [
+    "## Statistics",
+    "",
+    "- **Score of a run**: SPL of its final greedy path (BFS optimum over the path's length if "
+    "it reaches the target, else 0), averaged over the task's evaluation targets.",
+    "- **Success rate**: targets reached out of runs x evaluation targets, with the Wilson "
+    "95% score interval (it stays inside [0, 1] and does not shrink to a point when every "
+    "run succeeds or fails).",
+    "- **SPL**: the mean over tasks and seeds, with a 95% stratified-bootstrap interval "
+    "(rliable; tasks are the strata, seeds are resampled within each task). *all equal*: "
+    "every run scored the same, so the bootstrap has nothing to resample and gives no "
+    "interval; read the success rate's Wilson interval instead.",
+    f"- **IQM** is shown only where fewer than {stats.IQM_DEGENERATE_FRACTION:.0%} of the "
+    "scores are exactly 0 or 1; with more, the middle half of the scores is mostly zeros and "
+    "ones and the IQM is a stretched copy of the mean (the column then gives that fraction).",
+    f"- **Env steps to SPL ≥ {stats.SPL_REACHED}**: the first checkpoint of a run's curve at "
+    "or above it; a run that never gets there is censored at its budget. The median is the "
+    "Kaplan-Meier median (the first time the fraction not yet there falls to 1/2; `> B` "
+    "when half the runs or more never got there within B), the interval the 2.5 and 97.5 "
+    "percentiles of that median over a bootstrap of the runs stratified by task.",
+    "- **Headline budget**: the best learners are those whose SPL interval at the largest "
+    "budget overlaps the top learner's. The headline budget is the smallest budget of the "
+    "axis at which each of them has plateaued: its mean SPL at the next budget lies inside "
+    "its interval at this one. Without such a budget the headline sits at the largest "
+    "budget and says the plateau is not shown.",
+    "- **Performance profile**: the fraction of runs with SPL above τ, 95% band; "
+    "**probability of improvement**: P(a run of the row learner scores higher than a run "
+    "of the column learner on a task drawn at random), ties counting half (rliable).",
+    "",
+]
+
+
+def headline_table(a: dict[str, Any], b: int) -> list[str]:
+    e = a["per_budget"][b]["learners"]
+    rows = sorted((lr for lr in e if lr in a["ranked"]), key=lambda lr: -e[lr]["mean"])
+    rows += [lr for lr in e if lr not in a["ranked"]]
+    out = [
+        f"| learner | success (Wilson 95%) | SPL [95% CI] | IQM | env steps to SPL ≥ "
+        f"{stats.SPL_REACHED} | hyperparameters |",
+        "|---|---|---|---|---|---|",
+    ]
+    for lr in rows:
+        v = e[lr]
+        iqm = (
+            fmt_ci(v["iqm"], v["iqm_ci"])
+            if v["iqm_shown"]
+            else f"— ({v['degenerate']:.0%} of scores 0 or 1)"
+        )
+        label = (
+            lr
+            if lr in a["ranked"]
+            else f"{lr} ({'reference' if lr in a['reference'] else 'reproduction'}, not ranked)"
+        )
+        steps = "—" if v["steps_to"] is None else fmt_steps_to(v["steps_to"], b)
+        out.append(
+            f"| {label} | {fmt_wilson(v['success'])} | {fmt_ci(v['mean'], v['mean_ci'])} | "
+            f"{iqm} | {steps} | {', '.join(v['status'])} |"
+        )
+    return out
+
+
+def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Path | None) -> str:
+    suite = a["suite"]
+    rel = {k: os.path.relpath(v, out.parent) for k, v in figs.items()}
+    hist = os.path.relpath(history, out.parent) if history else None
+    axis = ", ".join(fmt_steps(b) for b in a["axis"])
+    L = [
+        "# Learner benchmark",
+        "",
+        "Generated by `python -m sixaxis_avoid.benchmark report` from the result files of the "
+        "study below (do not edit by hand; re-run the commands under *How to run*):",
+        "",
+        "```bash",
+        report_command_v2(a, out),
+        "```",
+        "",
+        f"Suite **{suite.name}** version {suite.version}: {suite.raw.get('description', '')} "
+        f"Budget axis (env steps): {axis}; {len(suite.tasks)} tasks, "
+        f"{len(suite.seeds)} seeds.",
+        "",
+    ]
+    if hist:
+        L += [f"History: the v1 study and its page, [{Path(hist).name}]({hist}).", ""]
+    if a["pending"]:
+        L += [
+            "## Headline",
+            "",
+            f"<!-- {HEADLINE_SECTION}:begin -->",
+            # Plain paths, no links: README.md shows a copy of this section.
+            f"No results of suite {suite.name} yet: `{a['results_dir']}` holds no run files "
+            "(the commands are under *How to run* in docs/BENCHMARKS.md)."
+            + (f" The v1 study is in {out.parent / Path(hist).name}." if hist else ""),
+            f"<!-- {HEADLINE_SECTION}:end -->",
+            "",
+        ]
+    else:
+        from sixaxis_avoid.benchmark.report import provenance, run_machines
+
+        m = a["manifest"]
+        head = a["headline"]
+        b = head["budget"] if head else max(a["budgets"])
+        n_runs = len(a["runs"])
+        n_seeds = len({r["spec"]["seed"] for r in a["runs"]})
+        L += [
+            f"{n_runs} runs: {len(a['learners'])} learners x {len(a['tasks'])} tasks x "
+            f"{n_seeds} seeds x {len(a['budgets'])} budgets"
+            + (f". {provenance(m)}." if m and "date" in m else ".")
+            + "".join(f" {s}" for s in [run_machines(a["runs"])] if s),
+            "",
+            f"## Headline ({fmt_steps(b)} env steps)",
+            "",
+        ]
+        if head and head["plateaued"]:
+            L.append(
+                f"At {fmt_steps(b)} env steps the best learners ({', '.join(head['best'])}) "
+                "have plateaued: each one's mean SPL at the next budget lies inside its 95% "
+                "interval here (*Score by budget*). Ranked by mean SPL; overlapping intervals "
+                "are not a ranking."
+            )
+        else:
+            L.append(
+                "**The plateau is not shown**: at no budget of the axis did every best learner "
+                f"({', '.join(head['best']) if head else 'none'}) stay within its interval at "
+                f"the next budget, so the headline sits at the largest budget, "
+                f"{fmt_steps(b)}, and its figures are lower bounds."
+            )
+        L += [
+            "",
+            f"<!-- {HEADLINE_SECTION}:begin -->",
+            *headline_table(a, b),
+            f"<!-- {HEADLINE_SECTION}:end -->",
+            "",
+        ]
+        if a["over_budget"]:
+            L += [
+                "**Over budget**: these runs used more env steps than the budget they are "
+                "reported at, so their row is not a same-budget comparison: "
+                + "; ".join(
+                    f"{o['learner']} at {fmt_steps(o['budget'])}: {o['runs']} of {o['of']} "
+                    f"runs, up to {fmt_steps(o['max_env_steps'])}"
+                    for o in a["over_budget"]
+                )
+                + ".",
+                "",
+            ]
+        L += [
+            "## Score by budget",
+            "",
+            "Mean SPL [95% stratified-bootstrap CI] of each learner at each budget of the axis "
+            "(runs at a budget use the hyperparameters tuned at it). ✓: the next budget's "
+            "mean lies inside this interval (plateaued); ✗: it does not.",
+            "",
+            "| learner | " + " | ".join(fmt_steps(x) for x in a["budgets"]) + " |",
+            "|---|" + "---|" * len(a["budgets"]),
+        ]
+        for lr in a["learners"]:
+            cells = []
+            for i, x in enumerate(a["budgets"]):
+                v = a["per_budget"][x]["learners"].get(lr)
+                if v is None:
+                    cells.append("—")
+                    continue
+                mark = ""
+                if i + 1 < len(a["budgets"]):
+                    nxt = a["per_budget"][a["budgets"][i + 1]]["learners"].get(lr)
+                    if nxt is not None:
+                        lo, hi = v["mean_ci"]
+                        mark = " ✓" if lo - 1e-12 <= nxt["mean"] <= hi + 1e-12 else " ✗"
+                cells.append(fmt_ci(v["mean"], v["mean_ci"]) + mark)
+            L.append(f"| {lr} | " + " | ".join(cells) + " |")
+        L += [
+            "",
+            f"![Curves of every learner on one env-steps axis]({rel['curves']})",
+            "",
+        ]
+        if "profiles" in rel:
+            L += [f"![Performance profiles]({rel['profiles']})", ""]
+        agg = a["per_budget"][b].get("agg", {})
+        poi = agg.get("poi", {})
+        names = [x for x in agg.get("learners", {}) if any(k.startswith(f"{x},") for k in poi)]
+        if names:
+            L += [
+                f"### Probability of improvement ({fmt_steps(b)} env steps)",
+                "",
+                "P(row > column), 95% CI; the reference and the reproduction rows are left out.",
+                "",
+                "| | " + " | ".join(names) + " |",
+                "|---|" + "---|" * len(names),
+                *[
+                    f"| **{x}** | "
+                    + " | ".join(
+                        "—" if x == y else fmt_ci(poi[f"{x},{y}"]["p"], poi[f"{x},{y}"]["ci"], 2)
+                        for y in names
+                    )
+                    + " |"
+                    for x in names
+                ],
+                "",
+            ]
+        L += [
+            f"## Per task ({fmt_steps(b)} env steps)",
+            "",
+            "Mean SPL over seeds (targets reached / runs x targets).",
+            "",
+            "| task | " + " | ".join(a["per_budget"][b]["learners"]) + " |",
+            "|---|" + "---|" * len(a["per_budget"][b]["learners"]),
+        ]
+        for t in a["tasks"]:
+            cells = []
+            for v in a["per_budget"][b]["learners"].values():
+                k, n = v["per_task"][t]["success"]
+                cells.append(f"{v['per_task'][t]['mean']:.3f} ({k}/{n})")
+            L.append(f"| {t} | " + " | ".join(cells) + " |")
+        groups: dict[str, list[str]] = {}
+        for t in a["tasks"]:
+            groups.setdefault(suite.task(t).group, []).append(t)
+        L += [
+            "",
+            f"### Per group ({fmt_steps(b)} env steps)",
+            "",
+            "Mean SPL over the group's tasks and seeds; success with its Wilson 95% interval.",
+            "",
+            "| group | tasks | " + " | ".join(a["per_budget"][b]["learners"]) + " |",
+            "|---|---|" + "---|" * len(a["per_budget"][b]["learners"]),
+        ]
+        for g, ts in groups.items():
+            cells = []
+            for v in a["per_budget"][b]["learners"].values():
+                k = sum(v["per_task"][t]["success"][0] for t in ts)
+                n = sum(v["per_task"][t]["success"][1] for t in ts)
+                mean = float(np.mean([v["per_task"][t]["mean"] for t in ts]))
+                cells.append(f"{mean:.3f}, " + fmt_wilson(stats.wilson(k, n)))
+            L.append(f"| {g} | {len(ts)} | " + " | ".join(cells) + " |")
+        L += [
+            "",
+            f"## Env steps to SPL ≥ {stats.SPL_REACHED}",
+            "",
+            "Kaplan-Meier median [95% CI], censored at the budget (*Statistics*).",
+            "",
+            "| learner | " + " | ".join(fmt_steps(x) for x in a["budgets"]) + " |",
+            "|---|" + "---|" * len(a["budgets"]),
+        ]
+        for lr in a["learners"]:
+            if lr in a["reference"]:
+                continue
+            cells = []
+            for x in a["budgets"]:
+                v = a["per_budget"][x]["learners"].get(lr)
+                cells.append(
+                    "—" if v is None or v["steps_to"] is None else fmt_steps_to(v["steps_to"], x)
+                )
+            L.append(f"| {lr} | " + " | ".join(cells) + " |")
+        L.append("")
+    L += [
+        "## Tuning record",
+        "",
+        *tuning_rows(a),
+        "",
+        "## Tasks",
+        "",
+        "Finer grids are the same physical world re-gridded (`cell_mm`, `Scenario.regrid`, "
+        "docs/SCENARIOS.md): more states and longer paths, where tabular learning gets hard. "
+        "No two tasks are the same world for a learner (checked when the suite loads).",
+        "",
+        *tasks_rows(suite),
+        "",
+        *STATISTICS,
+        "## How to run",
+        "",
+        "```bash",
+        "bash scripts/setup.sh && source .venv/bin/activate   # or: pip install -e '.[bench]'",
+        *(
+            (a["manifest"] or {}).get("commands", [])
+            or [f"python -m sixaxis_avoid.benchmark run --suite {suite.name} "
+                f"--out-dir {a['results_dir']}"]
+        ),
+        report_command_v2(a, out),
+        "```",
+        "",
+    ]  # fmt: skip
+    if hist:
+        L += [
+            "## History",
+            "",
+            f"- [{Path(hist).name}]({hist}): suite v1 (the paper's scenarios, one generated "
+            "world per level, deep budgets of 30k env steps against the tabular learners' "
+            "10,000 episodes), its longer-budget sections and its own commands.",
+            "",
+        ]
+    return "\n".join(L)
+
+
+def write_report_v2(
+    results: Path,
+    out: Path,
+    figures_dir: Path | None = None,
+    reps: int = stats.REPS,
+    suite: str | None = None,
+    history: Path | None = None,
+) -> dict[str, Any]:
+    """Write the v2 page ``out`` (figures in ``figures_dir``, default ``figures/bench-v2``
+    beside it) from the runs in ``results``; ``history``: the v1 page it links."""
+    from sixaxis_avoid.benchmark.report import keep_other_sections
+
+    out = Path(out)
+    figures_dir = Path(figures_dir) if figures_dir else out.parent / "figures" / "bench-v2"
+    a = analyse_v2(results, suite, reps)
+    figs = {} if a["pending"] else figures_v2(a, figures_dir)
+    text = markdown_v2(a, figs, out, history)
+    # The history page's marked sections stay there (one page per section).
+    theirs = set()
+    if history and Path(history).exists():
+        from sixaxis_avoid.benchmark.report import _SECTION
+
+        theirs = {m.group(1) for m in _SECTION.finditer(Path(history).read_text())}
+    atomic_write_text(out, keep_other_sections(out, text, exclude=theirs))
+    if not a["pending"]:
+        summary = {
+            "budgets": a["budgets"],
+            "headline": a["headline"],
+            "per_budget": {
+                str(b): {lr: {k: v[k] for k in ("mean", "mean_ci", "success", "iqm_shown",
+                                                "degenerate", "steps_to")}
+                         for lr, v in e["learners"].items()}
+                for b, e in a["per_budget"].items()
+            },
+        }  # fmt: skip
+        atomic_write_text(
+            figures_dir / "bench_v2_summary.json", json.dumps(summary, indent=1) + "\n"
+        )
+    return a

@@ -1,0 +1,353 @@
+"""Benchmark v2: the suite (distinct learner worlds, finer grids, the budget axis), its runs'
+specs, the statistics for near-binary outcomes and the v2 report (docs/BENCHMARKS.md)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import sixaxis_avoid as sa
+from sixaxis_avoid.benchmark import load_suite, plan_runs, runner, stats
+from sixaxis_avoid.benchmark.tasks import SuiteError, Task
+
+# -- suite v2 ---------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def v2():
+    return load_suite("v2")
+
+
+def test_v2_has_the_design_tasks_and_budget_axis(v2):
+    assert v2.major_version == 2
+    assert v2.budgets["axis"] == [30000, 100000, 300000, 1000000]
+    assert len(v2.seeds) == 10
+    ids = [t.id for t in v2.tasks]
+    assert "paper_simple" in ids and "paper_complex" not in ids and "replan_clutter" in ids
+    for level in ("easy", "medium", "hard"):
+        gen = [t for t in v2.tasks if t.group == f"generated:{level}"]
+        assert len(gen) == 5, level
+        assert len({t.spec["seed"] for t in gen}) == 5
+    assert [t.id for t in v2.tasks if t.is_goal] == ["goal-paper_simple"]
+    # Tuning shares no world with the reported tasks (also checked on loading).
+    v2.check_disjoint()
+    assert not {t.learner_world for t in v2.tuning_tasks} & {t.learner_world for t in v2.tasks}
+
+
+def test_finer_grid_tasks_are_regridded_solvable_and_bigger(v2):
+    coarse = v2.task("paper_simple")
+    sizes = {}
+    for tid, cell_mm in (("paper_simple-50mm", 50.0), ("paper_simple-25mm", 25.0)):
+        t = v2.task(tid)
+        d = t.describe()
+        assert d["cell_mm"] == cell_mm and t.group == f"paper@{cell_mm:g}mm"
+        path = sa.shortest_path(t.scenario)
+        assert path is not None  # solvable (BFS)
+        # The same physical path at a finer grid: optimum scales with 100 / cell_mm.
+        assert d["optimal_lengths"] == [coarse.optimal_lengths[0] * round(100 / cell_mm)]
+        sizes[cell_mm] = d["states"]
+    assert sizes == {50.0: 13 * 17 * 15, 25.0: 25 * 33 * 29}  # 3315 and 23925 states
+    gen = v2.task("gen-medium-0-50mm")
+    assert gen.describe()["states"] == 3315 and sa.shortest_path(gen.scenario) is not None
+    assert gen.learner_world != v2.task("gen-medium-0").learner_world
+
+
+def test_bad_cell_mm_names_the_task_and_value():
+    t = Task("x", "scenario", {"scenario": "paper_simple", "cell_mm": 30})
+    with pytest.raises(SuiteError, match=r"task 'x': cell_mm 30"):
+        _ = t.scenario
+
+
+def test_v1_has_a_duplicated_learner_world_and_v2_refuses_one(tmp_path):
+    v1 = load_suite("v1")  # v1 predates the check: it loads
+    with pytest.raises(SuiteError, match="'paper_simple' and 'paper_complex'"):
+        v1.check_distinct_worlds()
+    # The two differ in their raw terminal safe distance (0.96, 0.95), not in blocked cells.
+    a, b = v1.task("paper_simple"), v1.task("paper_complex")
+    assert a.scenario.terminal_safe_distance != b.scenario.terminal_safe_distance
+    assert list(a.blocked_states) == list(b.blocked_states)
+    raw = json.loads(load_suite("v2").path.read_text())
+    raw["tasks"].insert(1, {"id": "paper_complex", "kind": "scenario", "scenario": "paper_complex"})
+    p = tmp_path / "dup.json"
+    p.write_text(json.dumps(raw))
+    with pytest.raises(SuiteError, match="'paper_simple' and 'paper_complex'"):
+        load_suite(p)
+
+
+def test_learner_world_sees_rewards_step_cap_and_goal():
+    base = Task("a", "scenario", {"scenario": "paper_simple"})
+    # A reward or the episode's step cap changes what the learner sees.
+    for field in ("rewards", "learning"):
+        s = json.loads(base.scenario.to_json())
+        if field == "rewards":
+            s["rewards"]["step_penalty"] += 1.0
+        else:
+            s["learning"]["max_steps_per_episode"] += 1
+        t = Task("b", "scenario", {"scenario": "paper_simple"})
+        t.__dict__["scenario"] = sa.Scenario.from_json(json.dumps(s))
+        assert t.learner_world != base.learner_world, field
+    # The learning seed does not (each run sets its own), nor do the planning settings.
+    s = json.loads(base.scenario.to_json())
+    s["learning"]["seed"] = 7
+    s["planning"]["max_replans"] = 3
+    t = Task("c", "scenario", {"scenario": "paper_simple"})
+    t.__dict__["scenario"] = sa.Scenario.from_json(json.dumps(s))
+    assert t.learner_world == base.learner_world
+    goal = Task("g", "goal", {"scenario": "paper_simple", "eval_targets": 1, "target_seed": 0})
+    assert goal.learner_world != base.learner_world
+
+
+# -- run specs on the budget axis -------------------------------------------------------------
+
+
+def test_plan_runs_one_run_per_budget_with_the_budget_in_the_file_name(v2, tmp_path):
+    tasks = [v2.task("paper_simple"), v2.task("goal-paper_simple")]
+    specs = plan_runs(
+        v2, ["dqn", "bfs"], seeds=[0, 1], tasks=tasks, hyperparams=tmp_path / "none.json"
+    )
+    assert len(specs) == 2 * 2 * 2 * 4
+    dqn = [s for s in specs if s["learner"] == "dqn"]
+    assert sorted({s["budget"] for s in dqn}) == v2.budgets["axis"]
+    for s in dqn:  # the goal task gets the same total budget
+        assert s["budget"] == s["budget_axis"] and s["checkpoints"][-1] == s["budget"]
+        assert s["hyperparams_status"] == "untuned"  # no by_budget entry at all
+    keys = [runner.run_key(s) for s in specs]
+    assert len(set(keys)) == len(keys)
+    assert runner.run_key(dqn[0]).endswith(f"__b{dqn[0]['budget']}")
+    # A subset of the axis; a budget off the axis is refused by value.
+    sub = plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[100000],
+                    hyperparams=tmp_path / "none.json")  # fmt: skip
+    assert [s["budget"] for s in sub] == [100000]
+    with pytest.raises(ValueError, match="12345 is not on"):
+        plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[12345])
+    # v1 specs are unchanged: no axis, no budget in the file name.
+    v1 = load_suite("v1")
+    s1 = plan_runs(v1, ["dqn"], seeds=[0], tasks=[v1.task("paper_simple")])[0]
+    assert "budget_axis" not in s1 and runner.run_key(s1) == "paper_simple__dqn__s0"
+    with pytest.raises(ValueError, match="no budget axis"):
+        plan_runs(v1, ["dqn"], budgets=[30000])
+
+
+def test_plan_runs_takes_the_values_tuned_at_each_budget(v2, tmp_path):
+    hp = tmp_path / "hp.json"
+    hp.write_text(json.dumps({"learners": {"dqn": {"by_budget": {
+        "100000": {"values": {"learning_rate": 0.00042}, "status": "tuned",
+                   "trials": "docs/results/v2-tuning/dqn-100000.json", "objective": 0.9},
+    }}}}))  # fmt: skip
+    specs = plan_runs(v2, ["dqn"], seeds=[0], tasks=[v2.task("paper_simple")], hyperparams=hp)
+    by = {s["budget"]: s for s in specs}
+    assert by[100000]["hyperparams"]["learning_rate"] == 0.00042
+    assert by[100000]["hyperparams_status"] == "tuned"
+    for b in (30000, 300000, 1000000):  # never reused from another budget
+        assert by[b]["hyperparams_status"] == "untuned"
+        assert by[b]["hyperparams"]["learning_rate"] != 0.00042
+
+
+# -- statistics -------------------------------------------------------------------------------
+
+
+def test_wilson_interval_of_known_counts():
+    w = stats.wilson(7, 10)  # the textbook example: 0.397 .. 0.892
+    assert (round(w["lo"], 4), round(w["hi"], 4)) == (0.3968, 0.8922)
+    assert stats.wilson(0, 10)["lo"] == 0.0 and stats.wilson(0, 10)["hi"] > 0.27
+    assert stats.wilson(10, 10)["hi"] == 1.0 and stats.wilson(10, 10)["lo"] < 0.73
+    with pytest.raises(ValueError, match="successes 11 of trials 10"):
+        stats.wilson(11, 10)
+
+
+def test_iqm_rule_and_kaplan_meier_median():
+    assert not stats.iqm_shown(np.array([0.0] * 6 + [1.0] * 2 + [0.5] * 2))  # 80% at 0 or 1
+    assert stats.iqm_shown(np.array([0.0] * 5 + [1.0] * 2 + [0.5] * 3))  # 70%
+    # 3 of 5 reach at 10, 20, 30; 2 censored at 100: S = 0.8, 0.6, 0.4 -> median 30.
+    t, e = np.array([10, 20, 30, 100, 100]), np.array([1, 1, 1, 0, 0], bool)
+    assert stats.km_median(t, e) == 30.0
+    assert stats.km_median(t, np.array([1, 1, 0, 0, 0], bool)) is None  # beyond the budget
+    # A censored run leaves the risk set: S drops by 1/2 at 30 (2 at risk) -> 0.8*0.75*0.5.
+    ts, s = stats.kaplan_meier(np.array([10, 20, 25, 30, 40]), np.array([1, 1, 0, 1, 0], bool))
+    assert list(ts) == [10, 20, 30] and np.allclose(s, [0.8, 0.6, 0.3])
+
+
+def test_headline_budget_is_the_first_plateau_of_the_best():
+    rows = {
+        1: {"a": {"mean": 0.1, "mean_ci": [0.0, 0.2]}},
+        2: {"a": {"mean": 0.8, "mean_ci": [0.7, 0.9]}},
+        3: {"a": {"mean": 0.85, "mean_ci": [0.8, 0.9]}},
+    }
+    h = stats.headline_budget(rows, ["a"])
+    assert h["budget"] == 2 and h["plateaued"]
+    rows[3]["a"]["mean"] = 0.95  # still rising at the end: the largest, not plateaued
+    h = stats.headline_budget(rows, ["a"])
+    assert h["budget"] == 3 and not h["plateaued"]
+
+
+# -- the v2 report on synthetic runs ----------------------------------------------------------
+
+AXIS = [1000, 10000, 100000]
+TASKS = ["paper_simple", "gen-easy-0", "goal-paper_simple"]
+
+
+def synthetic_outcome(learner, task, seed, budget):
+    """(score, success, targets, first env steps at SPL >= 0.95 or None)."""
+    targets = 8 if task.startswith("goal") else 1
+    if learner == "bfs":
+        return 1.0, 1.0, targets, 0
+    if learner == "alpha":
+        if budget == 1000:
+            return 0.0, 0.0, targets, None
+        if task == "paper_simple" or (task == "gen-easy-0" and seed < 7):
+            return 1.0, 1.0, targets, budget // 2
+        if task == "goal-paper_simple":
+            return 0.7, 0.75, targets, None
+        return 0.0, 0.0, targets, None
+    # beta: exactly 0 or 1 everywhere, half of paper_simple from 10k on
+    if budget >= 10000 and task == "paper_simple" and seed < 5:
+        return 1.0, 1.0, targets, budget // 2
+    return 0.0, 0.0, targets, None
+
+
+def write_synthetic_study(tmp_path):
+    raw = json.loads(load_suite("v2").path.read_text())
+    raw["name"] = "v2-synthetic"
+    raw["budgets"] = {"axis": AXIS, "checkpoints": 4}
+    raw["tasks"] = [t for t in raw["tasks"] if t["id"] in TASKS]
+    raw["tuning"] = {"seeds": [100], "tasks": []}
+    raw["hyperparams"] = str(tmp_path / "hp.json")
+    (tmp_path / "hp.json").write_text(json.dumps({"learners": {"alpha": {"by_budget": {
+        "10000": {"values": {}, "status": "tuned", "objective": 0.875,
+                  "trials": "docs/results/v2-tuning/alpha-10000.json"}}}}}))  # fmt: skip
+    suite_path = tmp_path / "suite.json"
+    suite_path.write_text(json.dumps(raw))
+    out = tmp_path / "study"
+    for lr in ("alpha", "beta", "bfs"):
+        for t in raw["tasks"]:
+            for seed in range(10):
+                for b in AXIS:
+                    score, success, n, first = synthetic_outcome(lr, t["id"], seed, b)
+                    curve = (
+                        [{"env_steps": 0, "score": score, "success": success}]
+                        if lr == "bfs"
+                        else [
+                            {"env_steps": x, "score": score if first and x >= first else 0.0,
+                             "success": success if first and x >= first else 0.0}
+                            for x in (b // 10, b // 2, b)
+                        ]
+                    )  # fmt: skip
+                    curve[-1].update(score=score, success=success)
+                    spec = {
+                        "suite": raw["name"], "learner": lr, "seed": seed,
+                        "family": "reference" if lr == "bfs" else "deep",
+                        "task": {k: v for k, v in t.items()},
+                        "budget": 0 if lr == "bfs" else b, "budget_axis": b,
+                        "hyperparams_status": "n/a" if lr == "bfs"
+                        else ("tuned" if (lr, b) == ("alpha", 10000) else "untuned"),
+                    }  # fmt: skip
+                    record = {
+                        "spec": spec,
+                        "result": {"score": score, "success": success, "curve": curve,
+                                   "optimal_lengths": [9] * n, "env_steps": spec["budget"]},
+                        "host": {"machine": "synthetic CPU, 2 cores"},
+                    }  # fmt: skip
+                    if (lr, b, seed, t["id"]) == ("beta", 1000, 0, "paper_simple"):
+                        record["result"]["env_steps"] = 1500  # one run over its budget
+                    runner.write_run(out, record)
+    (out / "study.json").write_text(json.dumps({
+        "suite": raw, "learners": ["alpha", "beta", "bfs"], "tasks": TASKS,
+        "command": "python -m sixaxis_avoid.benchmark run --suite v2-synthetic",
+        "commands": ["python -m sixaxis_avoid.benchmark run --suite v2-synthetic"],
+        "date": "2026-12-03 12:00 UTC", "machine": "synthetic CPU, 2 cores",
+        "wall_time_s_total": 60.0,
+    }))  # fmt: skip
+    return suite_path, out
+
+
+def test_v2_report_on_synthetic_runs(tmp_path):
+    from sixaxis_avoid.benchmark.report_v2 import write_report_v2
+
+    suite_path, out = write_synthetic_study(tmp_path)
+    assert len(list((out / "runs").glob("*.json"))) == 3 * 3 * 10 * 3  # budget in the name
+    md = tmp_path / "BENCHMARKS.md"
+    history = tmp_path / "BENCHMARKS-v1.md"
+    history.write_text(
+        "# v1\n\n<!-- benchmark-aggregate:begin -->\nold\n<!-- benchmark-aggregate:end -->\n"
+    )
+    # The old page's v1 section moved to the history page: not kept; another owner's is.
+    md.write_text("old\n\n<!-- benchmark-aggregate:begin -->\nx\n<!-- benchmark-aggregate:end -->"
+                  "\n\n<!-- jax-twin:begin -->\nkept\n<!-- jax-twin:end -->\n")  # fmt: skip
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path), history=history)
+    assert a["budgets"] == AXIS and a["ranked"] == ["alpha", "beta"] and a["reference"] == ["bfs"]
+    at = a["per_budget"][10000]["learners"]
+    # 10 + 7 single targets and 6 of 8 goal targets in each of 10 runs: 77 of 100.
+    w = at["alpha"]["success"]
+    assert (w["successes"], w["trials"]) == (77, 100)
+    assert (round(w["lo"], 3), round(w["hi"], 3)) == (0.678, 0.842)
+    assert at["alpha"]["mean"] == pytest.approx((10 + 7 + 10 * 0.7) / 30)
+    # alpha: 20 of 30 scores at 0 or 1 (IQM shown); beta: all (IQM hidden).
+    assert at["alpha"]["iqm_shown"] and not at["beta"]["iqm_shown"]
+    assert at["beta"]["degenerate"] == 1.0
+    # 17 of 30 runs reach SPL >= 0.95 at 5000 steps; the others are censored at 10k.
+    s = at["alpha"]["steps_to"]
+    assert (s["reached"], s["runs"], s["median"]) == (17, 30, 5000.0)
+    # Best at the largest budget: alpha only (beta's interval is far below); it jumps from
+    # 1k to 10k and is flat from 10k to 100k: the headline budget is 10k.
+    assert a["best"] == ["alpha"]
+    assert a["headline"]["budget"] == 10000 and a["headline"]["plateaued"]
+    over = [{"learner": "beta", "budget": 1000, "runs": 1, "of": 30, "max_env_steps": 1500}]
+    assert a["over_budget"] == over
+    text = md.read_text()
+    assert "## Headline (10k env steps)" in text and "have plateaued" in text
+    assert "benchmark-aggregate" not in text and "<!-- jax-twin:begin -->\nkept" in text
+    assert "<!-- benchmark-headline:begin -->" in text
+    assert "0.770 [0.678, 0.842] (77/100)" in text
+    assert "— (100% of scores 0 or 1)" in text  # beta's IQM hidden
+    assert "5000 [" in text and "(17/30 reached)" in text
+    assert "| alpha | 10k | tuned | `docs/results/v2-tuning/alpha-10000.json` | 0.875 |" in text
+    assert "| alpha | 1000 | **untuned** |" in text
+    assert "bfs (reference, not ranked)" in text and "| bfs | 10k | n/a |" in text
+    assert "| alpha | 0.000 (all equal) ✗ | 0.800 [" in text  # no zero-width "interval"
+    assert "270 runs: 3 learners x 3 tasks x 10 seeds x 3 budgets" in text
+    assert "beta at 1000: 1 of 30 runs, up to 1500." in text
+    assert "| generated:easy | 1 | 0.700, 0.700 [0.397, 0.892] (7/10) |" in text  # per group
+    assert "[BENCHMARKS-v1.md](BENCHMARKS-v1.md)" in text
+    assert (tmp_path / "figures" / "bench-v2" / "bench_v2_curves.png").stat().st_size > 0
+    assert (tmp_path / "figures" / "bench-v2" / "bench_v2_profiles.png").stat().st_size > 0
+
+
+def test_v2_report_before_any_run_says_so(tmp_path):
+    from sixaxis_avoid.benchmark.__main__ import main
+
+    md = tmp_path / "B.md"
+    argv = ["report", "--suite", "v2", "--results", str(tmp_path / "none"), "--out", str(md),
+            "--history", str(tmp_path / "missing.md")]  # fmt: skip
+    assert main(argv) == 0
+    text = md.read_text()
+    assert "No results of suite v2 yet" in text
+    assert "| paper_simple-25mm | paper@25mm | 25x33x29 | 23925 | 25 |" in text
+    assert "| (none yet) | — | **untuned** |" in text or "**untuned**" in text
+
+
+def test_v1_report_is_the_history_page_and_links_the_current_one(tmp_path, monkeypatch):
+    """A v1 study's report (by default docs/BENCHMARKS-v1.md) names its own --out in its
+    command and links docs/BENCHMARKS.md; here on a slice of the committed v1 results."""
+    import shutil
+    from pathlib import Path
+
+    from sixaxis_avoid.benchmark.__main__ import main
+
+    src = Path(__file__).resolve().parent.parent / "docs" / "results" / "v1"
+    study = tmp_path / "docs" / "results" / "v1"
+    (study / "runs").mkdir(parents=True)
+    manifest = json.loads((src / "study.json").read_text())
+    manifest["learners"], manifest["tasks"] = ["bfs", "q_assist"], ["paper_simple", "gen-easy-0"]
+    (study / "study.json").write_text(json.dumps(manifest))
+    for lr in manifest["learners"]:
+        for t in manifest["tasks"]:
+            for seed in (0, 1):
+                name = f"{t}__{lr}__s{seed}.json"
+                shutil.copy(src / "runs" / name, study / "runs" / name)
+    monkeypatch.chdir(tmp_path)
+    assert main(["report", "--results", "docs/results/v1", "--reps", "100"]) == 0
+    text = (tmp_path / "docs" / "BENCHMARKS-v1.md").read_text()
+    assert "report --results docs/results/v1 --out docs/BENCHMARKS-v1.md\n" in text
+    assert "the current benchmark is [BENCHMARKS.md](BENCHMARKS.md)" in text
+    assert not (tmp_path / "docs" / "BENCHMARKS.md").exists()
