@@ -3,12 +3,9 @@
 
 use nalgebra::Vector3;
 
-use super::JointModel;
+use super::{JointModel, MAX_LINKS};
 use crate::error::Result;
-use crate::kinematics::Joints;
-
-/// Most links a polyline has (7 segments).
-const MAX_LINKS: usize = 7;
+use crate::kinematics::{ArmPoints, Joints};
 
 /// One step's outcome.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +30,8 @@ pub struct JointEpisode {
     goal: [f32; 3],
     previous_goal: [f32; 3],
     gaps_mm: [f64; MAX_LINKS],
+    /// The nearest obstacle box of each link (a hint of [`JointModel::check_move`]).
+    hints: [u32; MAX_LINKS],
     direction: [f64; 3],
     refused: bool,
     /// The last action, when it was refused (eq. 9's memory).
@@ -49,6 +48,7 @@ impl JointEpisode {
             goal: [0.0; 3],
             previous_goal: [0.0; 3],
             gaps_mm: [f64::INFINITY; MAX_LINKS],
+            hints: [0; MAX_LINKS],
             direction: [0.0; 3],
             refused: false,
             last_refused_action: None,
@@ -71,9 +71,16 @@ impl JointEpisode {
     /// Recompute the terminal, the goal, the link gaps and the nearest obstacle of `q`.
     fn measure(&mut self, model: &JointModel) {
         let points = model.arm().points_mm(&self.q);
+        model.link_gaps_fast(&points, f64::NEG_INFINITY, &mut self.gaps_mm, &mut self.hints);
+        self.observe(model, &points);
+    }
+
+    /// The terminal, the goal and the nearest obstacle of polyline `points` (the link gaps
+    /// are already in `gaps_mm`).
+    #[inline]
+    fn observe(&mut self, model: &JointModel, points: &ArmPoints) {
         self.terminal_mm = points[7];
         self.goal = model.goal_of(&self.terminal_mm);
-        model.link_gaps_mm(&points, &mut self.gaps_mm[..model.num_links()]);
         self.direction = model.nearest_obstacle_direction(&self.terminal_mm).0;
     }
 
@@ -90,14 +97,17 @@ impl JointEpisode {
         let o = model.options();
         let dq = action.map(|a| a * model.max_step_rad);
         let to: Joints = std::array::from_fn(|i| self.q[i] + dq[i]);
-        let (refused, substeps) = if model.within_limits(&to) {
+        let mut gaps = [f64::INFINITY; MAX_LINKS];
+        let mut hints = self.hints;
+        let (end, substeps) = if model.within_limits(&to) {
             (
-                !model.motion_is_clear_from(&self.q, &to, self.clearance_mm(model)),
+                model.check_move(&self.q, &to, &self.gaps_mm, &mut gaps, &mut hints),
                 model.substeps(&self.q, &to),
             )
         } else {
-            (true, 0)
+            (None, 0)
         };
+        let refused = end.is_none();
         let detour_penalty = match (o.assist, self.last_refused_action) {
             (true, Some(_)) if refused => -o.repeat_collision_penalty,
             (true, Some(last)) => {
@@ -106,10 +116,13 @@ impl JointEpisode {
             _ => 0.0,
         };
         self.previous_goal = self.goal;
-        if !refused {
+        if let Some(points) = end {
             self.q = to;
-            self.measure(model);
+            self.gaps_mm = gaps;
+            self.observe(model, &points);
         }
+        // The hints only steer the search order: keep what the check learnt either way.
+        self.hints = hints;
         self.refused = refused;
         self.last_refused_action = refused.then_some(*action);
         self.steps += 1;
