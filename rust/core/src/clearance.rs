@@ -317,7 +317,11 @@ pub fn segment_aabb_distance_mm(a: &[f64; 3], b: &[f64; 3], lo: &[f64; 3], hi: &
                 num += (c - a[i]) * d[i];
                 den += d[i] * d[i];
             }
-            let t = if den > 0.0 { (num / den).clamp(t0, t1) } else { t0 };
+            let t = if den > 0.0 {
+                (num / den).clamp(t0, t1)
+            } else {
+                t0
+            };
             return dist(t);
         }
         t0 = t0.max(t1);

@@ -30,6 +30,8 @@ pub struct JointEpisode {
     goal: [f32; 3],
     previous_goal: [f32; 3],
     gaps_mm: [f64; MAX_LINKS],
+    /// sin q (6) and cos q (6) as the observation has them (computed once per pose).
+    sincos: [f32; 12],
     /// The nearest obstacle box of each link (a hint of [`JointModel::check_move`]).
     hints: [u32; MAX_LINKS],
     direction: [f64; 3],
@@ -48,6 +50,7 @@ impl JointEpisode {
             goal: [0.0; 3],
             previous_goal: [0.0; 3],
             gaps_mm: [f64::INFINITY; MAX_LINKS],
+            sincos: [0.0; 12],
             hints: [0; MAX_LINKS],
             direction: [0.0; 3],
             refused: false,
@@ -71,14 +74,24 @@ impl JointEpisode {
     /// Recompute the terminal, the goal, the link gaps and the nearest obstacle of `q`.
     fn measure(&mut self, model: &JointModel) {
         let points = model.arm().points_mm(&self.q);
-        model.link_gaps_fast(&points, f64::NEG_INFINITY, &mut self.gaps_mm, &mut self.hints);
+        model.link_gaps_fast(
+            &points,
+            f64::NEG_INFINITY,
+            &mut self.gaps_mm,
+            &mut self.hints,
+        );
         self.observe(model, &points);
     }
 
-    /// The terminal, the goal and the nearest obstacle of polyline `points` (the link gaps
-    /// are already in `gaps_mm`).
+    /// sin and cos of `q`, the terminal, the goal and the nearest obstacle of polyline
+    /// `points` (the polyline of `q`; the link gaps are already in `gaps_mm`).
     #[inline]
     fn observe(&mut self, model: &JointModel, points: &ArmPoints) {
+        for i in 0..6 {
+            let (s, c) = self.q[i].sin_cos();
+            self.sincos[i] = s as f32;
+            self.sincos[6 + i] = c as f32;
+        }
         self.terminal_mm = points[7];
         self.goal = model.goal_of(&self.terminal_mm);
         self.direction = model.nearest_obstacle_direction(&self.terminal_mm).0;
@@ -147,11 +160,7 @@ impl JointEpisode {
     #[inline]
     pub fn write_obs(&self, model: &JointModel, out: &mut [f32]) {
         let l = model.num_links();
-        for i in 0..6 {
-            let (s, c) = self.q[i].sin_cos();
-            out[i] = s as f32;
-            out[6 + i] = c as f32;
-        }
+        out[..12].copy_from_slice(&self.sincos);
         out[12..15].copy_from_slice(&self.goal);
         out[15..18].copy_from_slice(&model.target_goal);
         let s = model.safe_distance_mm();

@@ -343,11 +343,20 @@ pub struct JointModel {
     target_goal: [f32; 3],
     /// Every obstacle as a box (min, max), mm: the cubes of the cells, then the boxes.
     boxes: Vec<([f64; 3], [f64; 3])>,
+    /// The same boxes as structure-of-arrays in chunks of [`BOX_LANES`] (lo x, y, z, hi x,
+    /// y, z), padded with empty far boxes (never measured: see `link_gap_fast`), so that
+    /// the lower-bound loop vectorises.
+    box_lanes: Vec<[[f64; BOX_LANES]; 6]>,
     max_step_rad: f64,
 }
 
 /// Index of the polyline point that is joint i's origin (base, O1, O2, O3, Aux, O4, O5, O6).
 const JOINT_POINT: [usize; 6] = [1, 2, 3, 5, 6, 7];
+
+/// Lanes of the box lower-bound loop.
+const BOX_LANES: usize = 4;
+/// Coordinate of padding boxes, mm: far from everything, its square finite.
+const FAR_MM: f64 = 1.0e100;
 
 /// Most links a polyline has (7 segments).
 pub(crate) const MAX_LINKS: usize = 7;
@@ -420,8 +429,13 @@ impl JointModel {
         let lever_mm = JOINT_POINT.map(|j| seg_len[j..].iter().sum());
         let mut link_lever_mm = [[0.0; 6]; MAX_LINKS];
         for (l, &k) in links.iter().enumerate() {
-            link_lever_mm[l] =
-                JOINT_POINT.map(|j| if k >= j { seg_len[j..=k].iter().sum() } else { 0.0 });
+            link_lever_mm[l] = JOINT_POINT.map(|j| {
+                if k >= j {
+                    seg_len[j..=k].iter().sum()
+                } else {
+                    0.0
+                }
+            });
         }
         let mut boxes: Vec<([f64; 3], [f64; 3])> = scenario
             .obstacles
@@ -437,6 +451,13 @@ impl JointModel {
                 .iter()
                 .map(|b| (b.min_mm, b.max_mm)),
         );
+        let mut box_lanes = vec![[[FAR_MM; BOX_LANES]; 6]; boxes.len().div_ceil(BOX_LANES)];
+        for (j, (lo, hi)) in boxes.iter().enumerate() {
+            for i in 0..3 {
+                box_lanes[j / BOX_LANES][i][j % BOX_LANES] = lo[i];
+                box_lanes[j / BOX_LANES][3 + i][j % BOX_LANES] = hi[i];
+            }
+        }
         let target_mm = scenario.cell_centre_mm(scenario.target);
         if target_mm.norm() > reach_mm {
             return Err(Error::invalid(
@@ -466,6 +487,7 @@ impl JointModel {
             target_mm,
             target_goal: [0.0; 3],
             boxes,
+            box_lanes,
             max_step_rad: opts.max_joint_step_deg.to_radians(),
         };
         model.target_goal = model.goal_of(&target_mm);
@@ -684,31 +706,43 @@ impl JointModel {
             let (lo, hi) = &self.boxes[j];
             (segment_aabb_distance_mm(&a, &b, lo, hi) - r).max(0.0)
         };
-        let Some(_) = self.boxes.get(hint) else {
-            return (f64::INFINITY, hint);
-        };
+        if self.boxes.is_empty() {
+            return (f64::INFINITY, 0);
+        }
+        let hint = if hint < self.boxes.len() { hint } else { 0 };
+        // A real box first: from here on `best` is finite, below the padding boxes' bound.
         let mut best = gap(hint);
         let mut at = hint;
         if best <= stop {
             return (best, at);
         }
-        for (j, (lo, hi)) in self.boxes.iter().enumerate() {
-            let mut d2 = 0.0;
+        for (c, lanes) in self.box_lanes.iter().enumerate() {
+            // Squared distance between the segment's bounding box and each box of the chunk:
+            // a lower bound of the segment's (branch-free, four boxes at a time).
+            let mut d2 = [0.0; BOX_LANES];
             for i in 0..3 {
-                let e = (lo[i] - smax[i]).max(smin[i] - hi[i]).max(0.0);
-                d2 += e * e;
+                for (l, d) in d2.iter_mut().enumerate() {
+                    let e = lanes[i][l] - smax[i];
+                    let f = smin[i] - lanes[3 + i][l];
+                    let e = if e > f { e } else { f };
+                    let e = if e > 0.0 { e } else { 0.0 };
+                    *d += e * e;
+                }
             }
-            // gap >= sqrt(d2) - r: skip unless sqrt(d2) - r < best.
-            let reach = best + r;
-            if d2 >= reach * reach || j == hint {
-                continue;
-            }
-            let g = gap(j);
-            if g < best {
-                best = g;
-                at = j;
-                if best <= stop {
-                    break;
+            for (l, &d) in d2.iter().enumerate() {
+                // gap >= sqrt(d2) - r: measure only if sqrt(d2) - r < best.
+                let reach = best + r;
+                let j = c * BOX_LANES + l;
+                if d >= reach * reach || j == hint {
+                    continue;
+                }
+                let g = gap(j);
+                if g < best {
+                    best = g;
+                    at = j;
+                    if best <= stop {
+                        return (best, at);
+                    }
                 }
             }
         }

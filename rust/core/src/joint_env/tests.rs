@@ -371,7 +371,10 @@ fn fast_check_equals_the_parry_reference() {
     let worlds = [
         (JointModel::new(&s, JointOptions::default()).unwrap(), 1u64),
         (JointModel::new(&s, thick).unwrap(), 2),
-        (JointModel::new(&generated, JointOptions::default()).unwrap(), 3),
+        (
+            JointModel::new(&generated, JointOptions::default()).unwrap(),
+            3,
+        ),
     ];
     for (m, seed) in &worlds {
         let mut rng = ChaCha8Rng::seed_from_u64(*seed);
@@ -400,7 +403,10 @@ fn fast_check_equals_the_parry_reference() {
             let nl = m.num_links();
             m.link_gaps_mm(&m.arm().points_mm(&ep.joints_rad()), &mut reference[..nl]);
             for (g, r) in ep.link_gaps_mm(m).iter().zip(&reference) {
-                assert!((g - r).abs() <= 1e-9, "seed {seed}, step {step}: {g} vs {r}");
+                assert!(
+                    (g - r).abs() <= 1e-9,
+                    "seed {seed}, step {step}: {g} vs {r}"
+                );
             }
             near += usize::from(ep.clearance_mm(m) < 2.0 * m.safe_distance_mm());
         }
