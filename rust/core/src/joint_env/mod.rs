@@ -29,9 +29,9 @@
 //!   arm point over one step is at most `Σ |Δq_i| L_i` mm long, so between two checked poses
 //!   it moves at most `substep_fraction · safe_distance_mm` mm: every pose of the continuous
 //!   motion keeps a gap >= `(1 - substep_fraction / 2) · safe_distance_mm` > 0, and no link
-//!   passes through a box. A step that starts with a gap g (mm, the smallest link gap of
-//!   the observation) and has `g - Σ |Δq_i| L_i > safe_distance_mm` needs no check at all:
-//!   no point can come closer than g minus its path.
+//!   passes through a box. The env's check (`JointModel::check_move`) gives the answer of
+//!   measuring all n poses exactly, but measures a link at a pose only when no motion bound
+//!   proves it clear, with closed-form segment-box distances (docs/JOINT.md, "Speed").
 //! - **Observation** ([`JointModel::obs_dim`] float32, [`ObsLayout`]): sin q (6), cos q (6),
 //!   terminal position / reach (3), target / reach (3) (reach: the polyline's length, mm, so
 //!   both lie in [-1, 1]), per link the gap g (mm) as `g / (g + safe_distance_mm)` in [0, 1]
