@@ -18,7 +18,8 @@ pub struct JointStep {
     pub reached: bool,
     /// Eq. 9's part of the reward (<= 0, before `reward_scale`; 0 without `assist`).
     pub detour_penalty: f64,
-    /// Interpolated poses checked (0 when the end pose left the joint limits).
+    /// Interpolated poses the check covers, `n` (each proven clear by a motion bound or
+    /// measured, docs/JOINT.md "Speed"; 0 when the end pose left the joint limits).
     pub substeps: u32,
 }
 
