@@ -167,7 +167,12 @@ impl JointBatch {
                 format!("expected 6 per env ({n} envs, {})", 6 * n),
             ));
         }
-        for i in 0..n {
+        // Named (formatted) only when wrong: no allocation per lane on the hot path.
+        if let Some(i) = (0..n).find(|&i| {
+            !actions[6 * i..6 * i + 6]
+                .iter()
+                .all(|v| (-1.0..=1.0).contains(v))
+        }) {
             JointModel::check_action(&format!("actions[{i}]"), &actions[6 * i..6 * i + 6])?;
         }
         let model = Arc::clone(&self.model);

@@ -3,12 +3,9 @@
 
 use nalgebra::Vector3;
 
-use super::JointModel;
+use super::{JointModel, MAX_LINKS};
 use crate::error::Result;
-use crate::kinematics::Joints;
-
-/// Most links a polyline has (7 segments).
-const MAX_LINKS: usize = 7;
+use crate::kinematics::{ArmPoints, Joints};
 
 /// One step's outcome.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,7 +18,8 @@ pub struct JointStep {
     pub reached: bool,
     /// Eq. 9's part of the reward (<= 0, before `reward_scale`; 0 without `assist`).
     pub detour_penalty: f64,
-    /// Interpolated poses checked (0 when the end pose left the joint limits).
+    /// Interpolated poses the check covers, `n` (each proven clear by a motion bound or
+    /// measured, docs/JOINT.md "Speed"; 0 when the end pose left the joint limits).
     pub substeps: u32,
 }
 
@@ -33,6 +31,10 @@ pub struct JointEpisode {
     goal: [f32; 3],
     previous_goal: [f32; 3],
     gaps_mm: [f64; MAX_LINKS],
+    /// sin q (6) and cos q (6) as the observation has them (computed once per pose).
+    sincos: [f32; 12],
+    /// The nearest obstacle box of each link (a hint of [`JointModel::check_move`]).
+    hints: [u32; MAX_LINKS],
     direction: [f64; 3],
     refused: bool,
     /// The last action, when it was refused (eq. 9's memory).
@@ -49,6 +51,8 @@ impl JointEpisode {
             goal: [0.0; 3],
             previous_goal: [0.0; 3],
             gaps_mm: [f64::INFINITY; MAX_LINKS],
+            sincos: [0.0; 12],
+            hints: [0; MAX_LINKS],
             direction: [0.0; 3],
             refused: false,
             last_refused_action: None,
@@ -71,9 +75,26 @@ impl JointEpisode {
     /// Recompute the terminal, the goal, the link gaps and the nearest obstacle of `q`.
     fn measure(&mut self, model: &JointModel) {
         let points = model.arm().points_mm(&self.q);
+        model.link_gaps_fast(
+            &points,
+            f64::NEG_INFINITY,
+            &mut self.gaps_mm,
+            &mut self.hints,
+        );
+        self.observe(model, &points);
+    }
+
+    /// sin and cos of `q`, the terminal, the goal and the nearest obstacle of polyline
+    /// `points` (the polyline of `q`; the link gaps are already in `gaps_mm`).
+    #[inline]
+    fn observe(&mut self, model: &JointModel, points: &ArmPoints) {
+        for i in 0..6 {
+            let (s, c) = self.q[i].sin_cos();
+            self.sincos[i] = s as f32;
+            self.sincos[6 + i] = c as f32;
+        }
         self.terminal_mm = points[7];
         self.goal = model.goal_of(&self.terminal_mm);
-        model.link_gaps_mm(&points, &mut self.gaps_mm[..model.num_links()]);
         self.direction = model.nearest_obstacle_direction(&self.terminal_mm).0;
     }
 
@@ -90,14 +111,17 @@ impl JointEpisode {
         let o = model.options();
         let dq = action.map(|a| a * model.max_step_rad);
         let to: Joints = std::array::from_fn(|i| self.q[i] + dq[i]);
-        let (refused, substeps) = if model.within_limits(&to) {
+        let mut gaps = [f64::INFINITY; MAX_LINKS];
+        let mut hints = self.hints;
+        let (end, substeps) = if model.within_limits(&to) {
             (
-                !model.motion_is_clear_from(&self.q, &to, self.clearance_mm(model)),
+                model.check_move(&self.q, &to, &self.gaps_mm, &mut gaps, &mut hints),
                 model.substeps(&self.q, &to),
             )
         } else {
-            (true, 0)
+            (None, 0)
         };
+        let refused = end.is_none();
         let detour_penalty = match (o.assist, self.last_refused_action) {
             (true, Some(_)) if refused => -o.repeat_collision_penalty,
             (true, Some(last)) => {
@@ -106,10 +130,13 @@ impl JointEpisode {
             _ => 0.0,
         };
         self.previous_goal = self.goal;
-        if !refused {
+        if let Some(points) = end {
             self.q = to;
-            self.measure(model);
+            self.gaps_mm = gaps;
+            self.observe(model, &points);
         }
+        // The hints only steer the search order: keep what the check learnt either way.
+        self.hints = hints;
         self.refused = refused;
         self.last_refused_action = refused.then_some(*action);
         self.steps += 1;
@@ -134,11 +161,7 @@ impl JointEpisode {
     #[inline]
     pub fn write_obs(&self, model: &JointModel, out: &mut [f32]) {
         let l = model.num_links();
-        for i in 0..6 {
-            let (s, c) = self.q[i].sin_cos();
-            out[i] = s as f32;
-            out[6 + i] = c as f32;
-        }
+        out[..12].copy_from_slice(&self.sincos);
         out[12..15].copy_from_slice(&self.goal);
         out[15..18].copy_from_slice(&model.target_goal);
         let s = model.safe_distance_mm();

@@ -29,9 +29,9 @@
 //!   arm point over one step is at most `Σ |Δq_i| L_i` mm long, so between two checked poses
 //!   it moves at most `substep_fraction · safe_distance_mm` mm: every pose of the continuous
 //!   motion keeps a gap >= `(1 - substep_fraction / 2) · safe_distance_mm` > 0, and no link
-//!   passes through a box. A step that starts with a gap g (mm, the smallest link gap of
-//!   the observation) and has `g - Σ |Δq_i| L_i > safe_distance_mm` needs no check at all:
-//!   no point can come closer than g minus its path.
+//!   passes through a box. The env's check (`JointModel::check_move`) gives the answer of
+//!   measuring all n poses exactly, but measures a link at a pose only when no motion bound
+//!   proves it clear, with closed-form segment-box distances (docs/JOINT.md, "Speed").
 //! - **Observation** ([`JointModel::obs_dim`] float32, [`ObsLayout`]): sin q (6), cos q (6),
 //!   terminal position / reach (3), target / reach (3) (reach: the polyline's length, mm, so
 //!   both lie in [-1, 1]), per link the gap g (mm) as `g / (g + safe_distance_mm)` in [0, 1]
@@ -70,7 +70,7 @@
 
 use nalgebra::Vector3;
 
-use crate::clearance::Clearance;
+use crate::clearance::{segment_aabb_distance_mm, Clearance};
 use crate::error::{Error, Result};
 use crate::kinematics::{Arm, ArmPoints, Joints};
 use crate::options::{
@@ -331,6 +331,9 @@ pub struct JointModel {
     links: Vec<usize>,
     /// `L_i`: polyline length distal to joint i's origin, mm.
     lever_mm: [f64; 6],
+    /// `ℓ_{i,k}` per link (in `links` order): polyline length from joint i's origin to the
+    /// far end of link k, mm (0 when joint i does not move link k): docs/JOINT.md, "Speed".
+    link_lever_mm: [[f64; 6]; MAX_LINKS],
     /// Polyline length, mm (the workspace radius).
     reach_mm: f64,
     limits_rad: [[f64; 2]; 6],
@@ -340,11 +343,30 @@ pub struct JointModel {
     target_goal: [f32; 3],
     /// Every obstacle as a box (min, max), mm: the cubes of the cells, then the boxes.
     boxes: Vec<([f64; 3], [f64; 3])>,
+    /// The same boxes as structure-of-arrays in chunks of [`BOX_LANES`] (lo x, y, z, hi x,
+    /// y, z), padded with empty far boxes (never measured: see `link_gap_fast`), so that
+    /// the lower-bound loop vectorises.
+    box_lanes: Vec<[[f64; BOX_LANES]; 6]>,
     max_step_rad: f64,
 }
 
 /// Index of the polyline point that is joint i's origin (base, O1, O2, O3, Aux, O4, O5, O6).
 const JOINT_POINT: [usize; 6] = [1, 2, 3, 5, 6, 7];
+
+/// Lanes of the box lower-bound loop.
+const BOX_LANES: usize = 4;
+/// Coordinate of padding boxes, mm: far from everything, its square finite.
+const FAR_MM: f64 = 1.0e100;
+
+/// Most links a polyline has (7 segments).
+pub(crate) const MAX_LINKS: usize = 7;
+
+/// Slack (mm) of the motion bounds of [`JointModel::check_move`]: a pose is taken as clear
+/// without an exact query only when its bound beats the safe distance by more than this, so
+/// that floating-point rounding (about 1e-13 mm on coordinates of at most a few metres)
+/// never turns a pose the exact query would refuse into an accepted one (docs/JOINT.md,
+/// "Speed").
+const BOUND_SLACK_MM: f64 = 1e-9;
 
 impl JointModel {
     /// The model of a scenario with these options. Errors: an option outside its domain; a
@@ -405,6 +427,16 @@ impl JointModel {
         let links: Vec<usize> = (0..7).filter(|&k| seg_len[k] > 0.0).collect();
         let reach_mm: f64 = seg_len.iter().sum();
         let lever_mm = JOINT_POINT.map(|j| seg_len[j..].iter().sum());
+        let mut link_lever_mm = [[0.0; 6]; MAX_LINKS];
+        for (l, &k) in links.iter().enumerate() {
+            link_lever_mm[l] = JOINT_POINT.map(|j| {
+                if k >= j {
+                    seg_len[j..=k].iter().sum()
+                } else {
+                    0.0
+                }
+            });
+        }
         let mut boxes: Vec<([f64; 3], [f64; 3])> = scenario
             .obstacles
             .iter()
@@ -419,6 +451,13 @@ impl JointModel {
                 .iter()
                 .map(|b| (b.min_mm, b.max_mm)),
         );
+        let mut box_lanes = vec![[[FAR_MM; BOX_LANES]; 6]; boxes.len().div_ceil(BOX_LANES)];
+        for (j, (lo, hi)) in boxes.iter().enumerate() {
+            for i in 0..3 {
+                box_lanes[j / BOX_LANES][i][j % BOX_LANES] = lo[i];
+                box_lanes[j / BOX_LANES][3 + i][j % BOX_LANES] = hi[i];
+            }
+        }
         let target_mm = scenario.cell_centre_mm(scenario.target);
         if target_mm.norm() > reach_mm {
             return Err(Error::invalid(
@@ -441,12 +480,14 @@ impl JointModel {
             safe_distance_mm,
             links,
             lever_mm,
+            link_lever_mm,
             reach_mm,
             limits_rad,
             beta0,
             target_mm,
             target_goal: [0.0; 3],
             boxes,
+            box_lanes,
             max_step_rad: opts.max_joint_step_deg.to_radians(),
         };
         model.target_goal = model.goal_of(&target_mm);
@@ -605,7 +646,9 @@ impl JointModel {
     }
 
     /// Whether the move `from -> to` (rad, linear in joint space) is clear at each of its
-    /// [`JointModel::substeps`] interpolated poses (`k = 1..=n`, the end pose first).
+    /// [`JointModel::substeps`] interpolated poses (`k = 1..=n`, the end pose first), every
+    /// pose measured by the clearance's parry query: the reference of the env's own,
+    /// faster check (`check_move`, docs/JOINT.md "Speed"), which gives the same answer.
     pub fn motion_is_clear(&self, from: &Joints, to: &Joints) -> bool {
         self.motion_is_clear_from(from, to, 0.0)
     }
@@ -639,6 +682,164 @@ impl JointModel {
             one[7] = points[k + 1];
             *o = self.clearance.capsules_gap_mm(&one, self.link_radius_mm);
         }
+    }
+
+    /// Exact gap (mm) of the capsule of segment `a`-`b` to the nearest obstacle box, by the
+    /// closed form [`segment_aabb_distance_mm`], and that box's index; `(INFINITY, hint)`
+    /// without obstacles. The box `hint` is measured first; every other box is first bounded
+    /// below by the distance between the segment's bounding box and it (the segment lies in
+    /// its bounding box), and measured exactly only when that bound could beat the best gap
+    /// so far. Returns as soon as the best gap is `<= stop` (then some gap `<= stop`).
+    #[inline]
+    pub(crate) fn link_gap_fast(
+        &self,
+        a: &Vector3<f64>,
+        b: &Vector3<f64>,
+        stop: f64,
+        hint: usize,
+    ) -> (f64, usize) {
+        let r = self.link_radius_mm;
+        let (a, b) = ([a.x, a.y, a.z], [b.x, b.y, b.z]);
+        let smin: [f64; 3] = std::array::from_fn(|i| a[i].min(b[i]));
+        let smax: [f64; 3] = std::array::from_fn(|i| a[i].max(b[i]));
+        let gap = |j: usize| {
+            let (lo, hi) = &self.boxes[j];
+            (segment_aabb_distance_mm(&a, &b, lo, hi) - r).max(0.0)
+        };
+        if self.boxes.is_empty() {
+            return (f64::INFINITY, 0);
+        }
+        let hint = if hint < self.boxes.len() { hint } else { 0 };
+        // A real box first: from here on `best` is finite, below the padding boxes' bound.
+        let mut best = gap(hint);
+        let mut at = hint;
+        if best <= stop {
+            return (best, at);
+        }
+        for (c, lanes) in self.box_lanes.iter().enumerate() {
+            // Squared distance between the segment's bounding box and each box of the chunk:
+            // a lower bound of the segment's (branch-free, four boxes at a time).
+            let mut d2 = [0.0; BOX_LANES];
+            for i in 0..3 {
+                for (l, d) in d2.iter_mut().enumerate() {
+                    let e = lanes[i][l] - smax[i];
+                    let f = smin[i] - lanes[3 + i][l];
+                    let e = if e > f { e } else { f };
+                    let e = if e > 0.0 { e } else { 0.0 };
+                    *d += e * e;
+                }
+            }
+            for (l, &d) in d2.iter().enumerate() {
+                // gap >= sqrt(d2) - r: measure only if sqrt(d2) - r < best.
+                let reach = best + r;
+                let j = c * BOX_LANES + l;
+                if d >= reach * reach || j == hint {
+                    continue;
+                }
+                let g = gap(j);
+                if g < best {
+                    best = g;
+                    at = j;
+                    if best <= stop {
+                        return (best, at);
+                    }
+                }
+            }
+        }
+        (best, at)
+    }
+
+    /// Each link's exact gap (mm, [`JointModel::links`] order) at polyline `points` by
+    /// [`JointModel::link_gap_fast`], into `gaps`, with `hints` (the nearest box of each
+    /// link, updated). Stops with `false` at the first link whose gap is `<= stop`.
+    #[inline]
+    pub(crate) fn link_gaps_fast(
+        &self,
+        points: &ArmPoints,
+        stop: f64,
+        gaps: &mut [f64; MAX_LINKS],
+        hints: &mut [u32; MAX_LINKS],
+    ) -> bool {
+        for (l, &k) in self.links.iter().enumerate() {
+            let (g, h) = self.link_gap_fast(&points[k], &points[k + 1], stop, hints[l] as usize);
+            gaps[l] = g;
+            hints[l] = h as u32;
+            if g <= stop {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// The env's check of the move `from -> to` (rad, linear in joint space, within the
+    /// limits), with `from_gaps` the exact link gaps at `from` (mm, [`JointModel::links`]
+    /// order; `INFINITY` is a valid entry without obstacles). The same answer as
+    /// [`JointModel::motion_is_clear`] (every pose `k/n`, `k = 1..=n`, `n` the
+    /// [`JointModel::substeps`], has every link gap `> safe_distance_mm`), computed with
+    /// fewer exact queries (docs/JOINT.md, "Speed"): the end pose is measured exactly
+    /// (its gaps go to `gaps`, its polyline is returned when the move is clear); an interior
+    /// pose is measured, link by link, only when no motion bound proves that link clear.
+    ///
+    /// The bound (docs/JOINT.md, "Speed"): along the move, every point of link k travels
+    /// at most `P_k · |t - t'|` mm between the poses at fractions t and t', with
+    /// `P_k = Σ_i |Δq_i| ℓ_{i,k}`; so a link whose exact gap at t is g has a gap of at least
+    /// `g - P_k |t - t'|` at t' (every point of the moved segment is within that path of a
+    /// point of the first, and a distance to a fixed box changes by at most the distance
+    /// moved). A link is taken as clear at t' when that bound exceeds the safe distance by
+    /// more than [`BOUND_SLACK_MM`], from the last pose where it was measured (t = 0 at
+    /// first) or from the end pose (t = 1).
+    pub(crate) fn check_move(
+        &self,
+        from: &Joints,
+        to: &Joints,
+        from_gaps: &[f64],
+        gaps: &mut [f64; MAX_LINKS],
+        hints: &mut [u32; MAX_LINKS],
+    ) -> Option<ArmPoints> {
+        let safe = self.safe_distance_mm;
+        let nl = self.links.len();
+        let dq: [f64; 6] = std::array::from_fn(|i| (to[i] - from[i]).abs());
+        let mut path = [0.0; MAX_LINKS];
+        for (p, lever) in path.iter_mut().zip(&self.link_lever_mm).take(nl) {
+            *p = (0..6).map(|i| dq[i] * lever[i]).sum();
+        }
+        let end = self.arm.points_mm(to);
+        if !self.link_gaps_fast(&end, safe, gaps, hints) {
+            return None;
+        }
+        let n = self.substeps(from, to);
+        // The last exact gap of each link and the fraction where it was measured.
+        let mut last = [f64::INFINITY; MAX_LINKS];
+        last[..nl].copy_from_slice(&from_gaps[..nl]);
+        let mut last_t = [0.0f64; MAX_LINKS];
+        let limit = safe + BOUND_SLACK_MM;
+        for k in 1..n {
+            let f = k as f64 / n as f64;
+            let mut open = [false; MAX_LINKS];
+            for l in 0..nl {
+                open[l] = last[l] - path[l] * (f - last_t[l]) <= limit
+                    && gaps[l] - path[l] * (1.0 - f) <= limit;
+            }
+            if !open.contains(&true) {
+                continue;
+            }
+            let q: Joints = std::array::from_fn(|i| from[i] + (to[i] - from[i]) * f);
+            let p = self.arm.points_mm(&q);
+            for l in 0..nl {
+                if !open[l] {
+                    continue;
+                }
+                let kk = self.links[l];
+                let (g, h) = self.link_gap_fast(&p[kk], &p[kk + 1], safe, hints[l] as usize);
+                if g <= safe {
+                    return None;
+                }
+                hints[l] = h as u32;
+                last[l] = g;
+                last_t[l] = f;
+            }
+        }
+        Some(end)
     }
 
     /// Unit vector from `p` (mm) to the nearest point of the nearest obstacle box, and that

@@ -353,3 +353,100 @@ fn reward_mapping() {
     let out = ep.step(&plain, &[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
     assert_eq!(out.reward, -0.04);
 }
+
+/// The env's check (`check_move`: closed-form distances, motion bounds, skipped poses)
+/// gives the reference's answer (every sub-step measured by parry) on long drifting
+/// rollouts, and the observation's link gaps equal the parry reference within 1e-9 mm:
+/// paper_simple, the same world with capsules of radius 10 mm, and a generated world.
+#[test]
+fn fast_check_equals_the_parry_reference() {
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let generated = crate::generator::generate(&crate::generator::GeneratorOptions::default(), 3)
+        .expect("generated world 3");
+    let thick = JointOptions {
+        link_radius_mm: Some(10.0),
+        safe_distance_mm: Some(12.0),
+        ..JointOptions::default()
+    };
+    let worlds = [
+        (JointModel::new(&s, JointOptions::default()).unwrap(), 1u64),
+        (JointModel::new(&s, thick).unwrap(), 2),
+        (
+            JointModel::new(&generated, JointOptions::default()).unwrap(),
+            3,
+        ),
+    ];
+    for (m, seed) in &worlds {
+        let mut rng = ChaCha8Rng::seed_from_u64(*seed);
+        let mut ep = JointEpisode::new(m);
+        let (mut refused, mut accepted, mut near) = (0, 0, 0);
+        let mut drift = [0.0; 6];
+        for step in 0..6000 {
+            if step % 300 == 0 {
+                ep.reset(m);
+            }
+            if step % 30 == 0 {
+                drift = random_action(&mut rng);
+            }
+            let a = drifting_action(&mut rng, &drift);
+            let q0 = ep.joints_rad();
+            let to: Joints = std::array::from_fn(|i| q0[i] + a[i] * m.max_step_rad);
+            let want = m.within_limits(&to) && m.motion_is_clear(&q0, &to);
+            let out = ep.step(m, &a).unwrap();
+            assert_eq!(out.refused, !want, "seed {seed}, step {step}");
+            if out.refused {
+                refused += 1;
+                continue;
+            }
+            accepted += 1;
+            let mut reference = [0.0; MAX_LINKS];
+            let nl = m.num_links();
+            m.link_gaps_mm(&m.arm().points_mm(&ep.joints_rad()), &mut reference[..nl]);
+            for (g, r) in ep.link_gaps_mm(m).iter().zip(&reference) {
+                assert!(
+                    (g - r).abs() <= 1e-9,
+                    "seed {seed}, step {step}: {g} vs {r}"
+                );
+            }
+            near += usize::from(ep.clearance_mm(m) < 2.0 * m.safe_distance_mm());
+        }
+        // Both answers, and steps close to the obstacles where the bounds cannot decide.
+        assert!(
+            refused > 300 && accepted > 1000 && near > 100,
+            "seed {seed}: {refused} refused, {accepted} accepted, {near} near"
+        );
+    }
+}
+
+/// The per-link motion bound of `check_move`: between two poses of a move at fractions t
+/// and t', no point of link k moves farther than `P_k |t - t'|`, with
+/// `P_k = Σ_i |Δq_i| ℓ_{i,k}` (checked on each link's ends and middle, 64 steps per move).
+#[test]
+fn link_motion_bound_holds() {
+    let m = model();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for _ in 0..300 {
+        let q0: Joints = std::array::from_fn(|_| rng.random_range(-PI..PI));
+        let a = random_action(&mut rng);
+        let q1: Joints = std::array::from_fn(|i| q0[i] + a[i] * m.max_step_rad);
+        let at = |k: u32| {
+            let f = k as f64 / 64.0;
+            m.arm()
+                .points_mm(&std::array::from_fn(|i| q0[i] + (q1[i] - q0[i]) * f))
+        };
+        for (l, &k) in m.links().iter().enumerate() {
+            let p: f64 = (0..6)
+                .map(|i| (q1[i] - q0[i]).abs() * m.link_lever_mm[l][i])
+                .sum();
+            assert!(p <= m.path_bound_mm(&q0, &q1) + 1e-9);
+            for s in 0..64 {
+                let (x, y) = (at(s), at(s + 1));
+                for w in [0.0, 0.5, 1.0] {
+                    let u = x[k] + (x[k + 1] - x[k]) * w;
+                    let v = y[k] + (y[k + 1] - y[k]) * w;
+                    assert!((u - v).norm() <= p / 64.0 + 1e-9, "link {k}");
+                }
+            }
+        }
+    }
+}
