@@ -245,8 +245,14 @@ def traced_fields(algo: str, values: dict[str, Any]) -> dict[str, float]:
     return out
 
 
-@functools.cache
 def rejax_classes() -> dict[str, Any]:
+    """:func:`_rejax_classes`, after checking that rejax imports (names the extra if not)."""
+    require("rejax", "rejax learners (sixaxis_avoid.benchmark.jax_learners)")
+    return _rejax_classes()
+
+
+@functools.cache
+def _rejax_classes() -> dict[str, Any]:
     """rejax's PPO and DQN with SB3's optimiser semantics and every knob that need not fix a
     shape as a traced field:
 
@@ -348,9 +354,9 @@ def counting_env(twin: Any, params: Any) -> Any:
     keeping the counters): the run's first success, read after training."""
     jax = require("jax", "rejax learners")
     jnp = jax.numpy
-    from sixaxis_avoid.jax.gymnax_compat import GymnaxEnv
-
     from flax import struct
+
+    from sixaxis_avoid.jax.gymnax_compat import GymnaxEnv
 
     class Counted(struct.PyTreeNode):
         inner: Any
@@ -451,7 +457,9 @@ class Compiled:
             ts, ev = jax.lax.scan(segment, ts, jnp.asarray(segments))
             es = ts.env_state
             first = jnp.where(es.first_step >= 0, (es.first_step - 1) * a.num_envs, -1)
-            first = jnp.where(first >= 0, first + jnp.arange(a.num_envs) + 1, jnp.iinfo(jnp.int32).max)
+            first = jnp.where(
+                first >= 0, first + jnp.arange(a.num_envs) + 1, jnp.iinfo(jnp.int32).max
+            )
             j = jnp.argmin(first)
             out = {
                 "success": ev[0],
@@ -467,6 +475,7 @@ class Compiled:
             return out, self.policy_params(ts)
 
         self._train = jax.jit(jax.vmap(jax.vmap(train_one, in_axes=(None, 0)), in_axes=(0, None)))
+        self._executables: dict[tuple[int, int], Any] = {}
 
     def policy_params(self, ts: Any) -> Any:
         return ts.actor_ts.params if self.algo == "ppo" else ts.q_ts.params
@@ -518,6 +527,24 @@ class Compiled:
         each evaluation target; None where it does not reach the target within the cap."""
         jax = require("jax", "rejax learners")
         jnp = jax.numpy
+        roll = self._roll if hasattr(self, "_roll") else self._make_roll()
+        start = [int(v) for v in np.asarray(self.params.cells)[int(self.params.start_state)]]
+        out: list[list[list[int]] | None] = []
+        for t in self.targets:
+            cells, moved, term = (np.asarray(x) for x in roll(params, jnp.int32(t)))
+            if not term.any():
+                out.append(None)
+                continue
+            end = int(np.argmax(term)) + 1
+            out.append(
+                [start] + [[int(v) for v in c] for c, m in zip(cells[:end], moved[:end]) if m]
+            )
+        return out
+
+    def _make_roll(self) -> Any:
+        """The jitted greedy rollout of :meth:`paths` (built once)."""
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
         twin, base, cap = self.twin, self.base, self.eval_cap
 
         @jax.jit
@@ -532,22 +559,16 @@ class Compiled:
                 obs2, st2, _, d, info = twin.step_env(key, st, a, p)
                 moved = jnp.logical_and(~done, ~info["collided"])
                 out = (info["cell"], moved, jnp.logical_and(~done, info["terminated"]))
-                keep = jax.tree_util.tree_map(lambda x, y: jnp.where(done, x, y), (obs, st), (obs2, st2))
+                keep = jax.tree_util.tree_map(
+                    lambda x, y: jnp.where(done, x, y), (obs, st), (obs2, st2)
+                )
                 return (keep[0], keep[1], jnp.logical_or(done, d)), out
 
             _, (cells, moved, term) = jax.lax.scan(body, (obs, st, jnp.bool_(False)), None, cap)
             return cells, moved, term
 
-        start = [int(v) for v in np.asarray(self.params.cells)[int(self.params.start_state)]]
-        out: list[list[list[int]] | None] = []
-        for t in self.targets:
-            cells, moved, term = (np.asarray(x) for x in roll(params, jnp.int32(t)))
-            if not term.any():
-                out.append(None)
-                continue
-            end = int(np.argmax(term)) + 1
-            out.append([start] + [[int(v) for v in c] for c, m in zip(cells[:end], moved[:end]) if m])
-        return out
+        self._roll = roll
+        return roll
 
     def run(self, candidates: list[dict[str, Any]], seeds: list[int]) -> dict[str, Any]:
         """Train every candidate (this group's static values) on every seed in one call."""
@@ -557,7 +578,10 @@ class Compiled:
         batch = {k: jnp.asarray([f[k] for f in fields], jnp.float32) for k in fields[0]}
         keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
         t0 = time.perf_counter()
-        compiled = self._train.lower(batch, keys).compile()
+        shape = (len(candidates), len(seeds))
+        if shape not in self._executables:  # compiled once per (candidates, seeds) shape
+            self._executables[shape] = self._train.lower(batch, keys).compile()
+        compiled = self._executables[shape]
         compile_s = time.perf_counter() - t0
         t0, c0 = time.perf_counter(), time.process_time()
         out, params = compiled(batch, keys)
@@ -572,6 +596,24 @@ class Compiled:
             "env_steps": self.env_steps,
             "env_steps_per_s": len(candidates) * len(seeds) * self.env_steps[-1] / wall,
         }
+
+
+_GROUPS: dict[str, Compiled] = {}
+
+
+def compiled_group(
+    algo: str, task: Any, values: dict[str, Any], budget: int, checkpoints: list[int]
+) -> Compiled:
+    """The :class:`Compiled` group of ``values``' static knobs on ``task`` (built once per
+    process: a second tuning or run group of the same shapes reuses its executable)."""
+    key = json.dumps(
+        [algo, task.id, task.kind, task.spec, static_key(algo, values), budget, checkpoints],
+        sort_keys=True,
+        default=str,
+    )
+    if key not in _GROUPS:
+        _GROUPS[key] = Compiled(algo, task, values, budget, checkpoints)
+    return _GROUPS[key]
 
 
 def train_candidates(
@@ -592,8 +634,8 @@ def train_candidates(
     for i, c in enumerate(checked):
         groups.setdefault(static_key(algo, c), []).append(i)
     results: list[dict[str, Any] | None] = [None] * len(checked)
-    for g, (key, idx) in enumerate(groups.items()):
-        comp = Compiled(algo, task, checked[idx[0]], budget, checkpoints or [budget])
+    for g, idx in enumerate(groups.values()):
+        comp = compiled_group(algo, task, checked[idx[0]], budget, checkpoints or [budget])
         r = comp.run([checked[i] for i in idx], seeds)
         for j, i in enumerate(idx):
             results[i] = {

@@ -575,6 +575,13 @@ BUILTIN: dict[str, type[Learner]] = {
 }
 
 
+# The JAX learners (jax_ppo, jax_dqn; family "jax"): their module imports JAX only when they
+# run, so naming them needs no JAX.
+from sixaxis_avoid.benchmark.jax_runs import LEARNERS as _JAX_LEARNERS  # noqa: E402
+
+BUILTIN.update(_JAX_LEARNERS)
+
+
 class LearnerError(ValueError):
     """A learner name that is neither built in nor an importable ``module:Class``."""
 
