@@ -275,13 +275,15 @@ def _rejax_classes() -> dict[str, Any]:
     from rejax.algos.algorithm import register_init
     from rejax.networks import DiscreteQNetwork, EpsilonGreedyPolicy
 
-    def schedule(algo: Any, updates_per_iteration: int) -> Any:
+    def schedule(algo: Any, updates_per_iteration: int, first_iteration: Any = 0) -> Any:
+        """``count`` (updates so far) -> rate; ``first_iteration``: the iteration of the
+        first update (DQN's first after ``learning_starts``)."""
         lr, decay = algo.learning_rate, algo.lr_decay
         iters = max(int(algo.lr_iterations), 1)
 
         def rate(count: Any) -> Any:
-            done = jnp.minimum((count // updates_per_iteration + 1) / iters, 1.0)
-            return lr * (1.0 - decay * done)
+            it = first_iteration + count // updates_per_iteration
+            return lr * (1.0 - decay * jnp.minimum((it + 1) / iters, 1.0))
 
         return rate
 
@@ -340,7 +342,13 @@ def _rejax_classes() -> dict[str, Any]:
             q_params = self.agent.init(rng, obs)
             tx = optax.chain(
                 optax.clip_by_global_norm(self.max_grad_norm),
-                optax.adam(learning_rate=schedule(self, self.num_epochs)),
+                # rejax updates from the first iteration whose env steps before it exceed
+                # learning_starts; the schedule counts the iterations before it too.
+                optax.adam(
+                    learning_rate=schedule(
+                        self, self.num_epochs, jnp.floor(self.fill_buffer / self.num_envs) + 1
+                    )
+                ),
             )
             q_ts = TrainState.create(apply_fn=(), params=q_params, tx=tx)
             return {"q_ts": q_ts, "q_target_params": q_params}
