@@ -11,7 +11,7 @@ import jax
 import numpy as np
 import pytest
 from gymnasium.error import DependencyNotInstalled
-from sixaxis_avoid.benchmark import jax_learners, jax_runs, jax_tune, report, runner
+from sixaxis_avoid.benchmark import jax_learners, jax_runs, jax_tune, learners, report, runner
 from sixaxis_avoid.benchmark.tasks import load_suite
 
 TINY_DQN = {
@@ -184,6 +184,8 @@ def test_run_group_records_read_by_the_report(tmp_path):
     assert a["per"]["jax_ppo"]["score_mean"] == pytest.approx(
         np.mean([r["result"]["score"] for r in records])
     )
-    assert report.title("jax_ppo").startswith("rejax PPO")
+    assert learners.resolve("jax_dqn") is jax_runs.JaxDQN
+    assert learners.family_of(learners.resolve("jax_ppo")) == "jax"
+    assert "jax_ppo" not in learners.BUILTIN  # the default study does not run it
     with pytest.raises(ValueError, match="differ in more than their seed"):
         jax_runs.run_group([specs[0], {**specs[1], "budget": 2048}])
