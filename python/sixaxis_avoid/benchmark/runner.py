@@ -120,7 +120,7 @@ def plan_runs(
                         else [],
                         "hyperparams": hp,
                         "hyperparams_status": "n/a"
-                        if family not in ("deep", "jax")
+                        if family != "deep"
                         else hpmod.status_for(hp_file, learner),
                         "max_replans": int(cap),
                         **({"tag": tag} if tag else {}),
