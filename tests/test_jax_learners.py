@@ -7,37 +7,52 @@ import importlib
 import json
 import sys
 
+import jax
+import numpy as np
 import pytest
 from gymnasium.error import DependencyNotInstalled
-from sixaxis_avoid.benchmark import jax_learners
+from sixaxis_avoid.benchmark import jax_learners, jax_runs, jax_tune, learners, report, runner
+from sixaxis_avoid.benchmark.tasks import load_suite
+
+TINY_DQN = {
+    "net_arch": [16, 16], "batch_size": 16, "buffer_size": 1000, "learning_starts": 100,
+    "train_freq": 4, "gradient_steps": 1, "max_episode_steps": 50,
+    "target_update_interval": 100,
+}  # fmt: skip
+TINY_PPO = {
+    "net_arch": [16, 16], "n_envs": 4, "n_steps": 16, "batch_size": 32, "n_epochs": 1,
+    "max_episode_steps": 50,
+}  # fmt: skip
 
 
 def test_tiny_ppo_run_records_its_flags_speed_and_evaluations(tmp_path):
     out = tmp_path / "ppo.json"
     rec = jax_learners.main(
         [
-            "--seeds", "2", "--total-timesteps", "2048", "--eval-freq", "1024",
-            "--num-envs", "4", "--num-steps", "16", "--num-minibatches", "2",
-            "--num-epochs", "1", "--hidden", "16,16", "--max-episode-steps", "50",
+            "--seeds", "2", "--budget", "2048", "--evaluations", "2",
+            "--set", "n_envs=4", "--set", "n_steps=16", "--set", "batch_size=32",
+            "--set", "n_epochs=1", "--set", "net_arch=[16,16]", "--set", "max_episode_steps=50",
             "--sb3-steps", "512", "--out", str(out),
         ]
     )  # fmt: skip
     assert json.loads(out.read_text()) == rec
     assert rec["seeds"] == [0, 1] and rec["task"] == "paper_simple"
-    assert rec["flags"]["hidden"] == "16,16" and rec["rejax_config"]["num_steps"] == 16
+    assert rec["values"]["net_arch"] == [16, 16] and rec["rejax_config"]["num_steps"] == 16
     assert rec["rejax_config"]["agent_kwargs"]["hidden_layer_sizes"] == [16, 16]
-    # Evaluations at 0, 1024 and 2048 env steps, per seed.
-    assert rec["eval_env_steps"] == [0, 1024, 2048]
+    assert rec["rejax_config"]["num_minibatches"] == 2  # 4 x 16 / 32
+    # Evaluations at 1024 and 2048 env steps (whole iterations of 64), per seed.
+    assert rec["eval_env_steps"] == [1024, 2048]
     for key in ("success", "spl"):
-        assert len(rec[key]) == 2 and all(len(r) == 3 for r in rec[key])
+        assert len(rec[key]) == 2 and all(len(r) == 2 for r in rec[key])
         assert all(0.0 <= v <= 1.0 for r in rec[key] for v in r)
     # SPL is at most the success, and positive only where the target was reached.
     for s_row, p_row in zip(rec["success"], rec["spl"]):
         assert all(p <= s and (p > 0) == (s > 0) for s, p in zip(s_row, p_row))
     assert rec["env_steps_per_s"] > 0 and rec["compile_s"] > 0
     # The SB3 PPO of the same values, timed.
-    assert rec["sb3_ppo"]["env_steps"] == 512 and rec["sb3_ppo"]["env_steps_per_s"] > 0
-    assert rec["speedup_vs_sb3"] == rec["env_steps_per_s"] / rec["sb3_ppo"]["env_steps_per_s"]
+    assert rec["sb3"]["env_steps"] == 512 and rec["sb3"]["env_steps_per_s"] > 0
+    assert rec["sb3"]["updates_per_env_step"] == rec["updates_per_env_step"] == 2 / 64
+    assert rec["speedup_vs_sb3"] == rec["env_steps_per_s"] / rec["sb3"]["env_steps_per_s"]
 
 
 def test_missing_rejax_names_the_jax_learners_extra(monkeypatch):
@@ -45,7 +60,7 @@ def test_missing_rejax_names_the_jax_learners_extra(monkeypatch):
         monkeypatch.delitem(sys.modules, mod)
     monkeypatch.setitem(sys.modules, "rejax", None)
     with pytest.raises(DependencyNotInstalled, match=r"sixaxis-avoid\[jax-learners\]"):
-        jax_learners.main(["--seeds", "1", "--total-timesteps", "64"])
+        jax_learners.main(["--seeds", "1", "--budget", "64"])
 
 
 def test_gymnax_interface_module_names_its_extra(monkeypatch):
@@ -55,3 +70,122 @@ def test_gymnax_interface_module_names_its_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "gymnax", None)
     with pytest.raises(DependencyNotInstalled, match=r"sixaxis-avoid\[jax-learners\]"):
         importlib.import_module("sixaxis_avoid.jax.gymnax_compat")
+
+
+def test_dqn_vmapped_over_candidates_equals_each_candidate_alone():
+    # Two candidates differing in traced knobs (learning rate and its schedule, gamma,
+    # exploration, target-update interval) train in one call; the second, trained alone on
+    # the same seeds, gives the same evaluations and the same final Q-network.
+    task = load_suite("v1").task("paper_simple")
+    c1 = {**TINY_DQN, "learning_rate": 1e-3}
+    c2 = {
+        **TINY_DQN, "learning_rate": 3e-3, "lr_schedule": "linear", "gamma": 0.9,
+        "exploration_fraction": 0.3, "target_update_interval": 200, "max_episode_steps": 40,
+    }  # fmt: skip
+    comp = jax_learners.compiled_group("dqn", task, jax_learners.check_values("dqn", c1),
+                                       1200, [400, 1200])  # fmt: skip
+    both = comp.run([jax_learners.check_values("dqn", c) for c in (c1, c2)], [0, 1])
+    alone = comp.run([jax_learners.check_values("dqn", c2)], [0, 1])
+    assert both["env_steps"] == alone["env_steps"] == [400, 1200]
+    for key in ("success", "spl", "reached", "moves", "first_success_env_steps", "episodes"):
+        assert both["out"][key].shape[:2] == (2, 2)
+        np.testing.assert_array_equal(both["out"][key][1], alone["out"][key][0])
+    for a, b in zip(jax.tree_util.tree_leaves(both["params"]),
+                    jax.tree_util.tree_leaves(alone["params"])):  # fmt: skip
+        np.testing.assert_allclose(np.asarray(a)[1], np.asarray(b)[0], rtol=1e-5, atol=1e-6)
+    # The two candidates did train differently (the check above could not pass by accident).
+    leaf = jax.tree_util.tree_leaves(both["params"])[0]
+    assert not np.allclose(np.asarray(leaf)[0], np.asarray(leaf)[1])
+    # DQN trained and was evaluated: scores in [0, 1], SPL positive only where reached.
+    spl, success = both["out"]["spl"], both["out"]["success"]
+    assert ((0 <= spl) & (spl <= success) & (success <= 1)).all()
+    assert ((spl > 0) == (success > 0)).all()
+    assert (both["out"]["episodes"] > 0).all()
+
+
+def test_bad_values_name_the_field_and_value():
+    with pytest.raises(jax_learners.JaxLearnerError, match=r"lr_schedule: 'cosine'"):
+        jax_learners.check_values("ppo", {"lr_schedule": "cosine"})
+    with pytest.raises(jax_learners.JaxLearnerError, match=r"batch_size: 48 does not divide"):
+        jax_learners.check_values("ppo", {"batch_size": 48})
+    with pytest.raises(jax_learners.JaxLearnerError, match=r"unknown hyperparameter 'n_envs'"):
+        jax_learners.check_values("dqn", {"n_envs": 4})
+    with pytest.raises(jax_learners.JaxLearnerError, match=r"gamma: 1.5"):
+        jax_learners.check_values("dqn", {"gamma": 1.5})
+
+
+def test_random_search_space_has_schedules_and_few_compiled_groups():
+    cands = jax_tune.draw("ppo", 32, 2, seed=0)
+    assert len(cands) == 32 and cands == jax_tune.draw("ppo", 32, 2, seed=0)
+    assert {c["lr_schedule"] for c in cands} == {"constant", "linear"}
+    assert len({jax_learners.static_key("ppo", c) for c in cands}) <= 2
+    assert len({c["learning_rate"] for c in cands}) == 32
+
+
+def test_tuner_writes_every_trial_and_merges_the_best(tmp_path, monkeypatch):
+    hp = tmp_path / "v2.json"
+    hp.write_text(json.dumps({"learners": {"q_assist": {"by_budget": {"30000": {"x": 1}}}}}))
+    # One static group over every candidate, tiny shapes (the space's draws cost more).
+    monkeypatch.setattr(
+        jax_tune,
+        "space",
+        lambda algo, rng: (
+            dict(TINY_PPO),
+            {
+                "learning_rate": float(rng.uniform(1e-4, 3e-3)),
+                "lr_schedule": ["constant", "linear"][int(rng.integers(2))],
+            },
+        ),
+    )
+    out = tmp_path / "trials.json"
+    rec = jax_tune.main([
+        "--algo", "ppo", "--suite", "v1", "--tasks", "tune-gen-easy-1000", "--budget", "1024",
+        "--trials", "3", "--seeds", "2", "--hyperparams", str(hp), "--out", str(out),
+    ])  # fmt: skip
+    data = json.loads(out.read_text())
+    assert data == json.loads(json.dumps(rec))
+    assert [t["number"] for t in data["trials"]] == [0, 1, 2] and data["seeds"] == [100, 101]
+    for t in data["trials"]:
+        scores = t["final_score"]["tune-gen-easy-1000"]
+        assert len(scores) == 2 and t["objective"] == pytest.approx(np.mean(scores))
+        assert t["curves"]["tune-gen-easy-1000"]["env_steps"][-1] == 1024
+    best = max(data["trials"], key=lambda t: t["objective"])
+    assert data["best_value"] == best["objective"]
+    merged = json.loads(hp.read_text())["learners"]
+    assert merged["q_assist"] == {"by_budget": {"30000": {"x": 1}}}  # kept
+    entry = merged["jax_ppo"]["by_budget"]["1024"]
+    assert entry["status"] == "tuned" and entry["objective"] == best["objective"]
+    assert entry["values"] == data["trials"][data["best_trial"]]["values"]
+    assert entry["trials"] == str(out) and entry["n_trials"] == 3
+
+
+def test_run_group_records_read_by_the_report(tmp_path):
+    suite = load_suite("quick")
+    task = suite.tasks[0]
+    specs = runner.plan_runs(suite, ["jax_ppo"], seeds=[0, 1], tasks=[task])
+    for s in specs:
+        s["budget"], s["checkpoints"] = 1024, [256, 1024]
+        s["hyperparams"] = {**s["hyperparams"], **TINY_PPO}
+    assert {s["family"] for s in specs} == {"jax"}
+    assert len(jax_runs.groups(specs)) == 1
+    records = jax_runs.run_group(specs)
+    assert [r["spec"]["seed"] for r in records] == [0, 1]
+    for r in records:
+        res = r["result"]
+        assert [p["env_steps"] for p in res["curve"]] == [256, 1024]
+        assert res["env_steps"] == 1024 and res["score"] == res["curve"][-1]["score"]
+        assert len(res["paths"]) == len(task.eval_targets) and r["host"]["machine"]
+        for path, length in zip(res["paths"], res["path_lengths"]):
+            assert (path is None) == (length is None)
+        runner.write_run(tmp_path, r)
+    runner.write_manifest(tmp_path, {"learners": ["jax_ppo"], "tasks": [task.id]})
+    a = report.analyse(tmp_path, reps=50)
+    assert a["learners"] == ["jax_ppo"] and a["seeds"] == [0, 1]
+    assert a["per"]["jax_ppo"]["score_mean"] == pytest.approx(
+        np.mean([r["result"]["score"] for r in records])
+    )
+    assert learners.resolve("jax_dqn") is jax_runs.JaxDQN
+    assert learners.family_of(learners.resolve("jax_ppo")) == "jax"
+    assert "jax_ppo" not in learners.BUILTIN  # the default study does not run it
+    with pytest.raises(ValueError, match="differ in more than their seed"):
+        jax_runs.run_group([specs[0], {**specs[1], "budget": 2048}])

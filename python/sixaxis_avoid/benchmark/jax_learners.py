@@ -1,31 +1,41 @@
-"""rejax learners on the JAX twin (``sixaxis_avoid.jax``), ``jax.vmap``-ed over seeds::
+"""rejax learners (PPO, DQN) on the JAX twin (``sixaxis_avoid.jax``), ``jax.vmap``-ed over
+seeds and over hyperparameter candidates::
 
     taskset -c 0 python -m sixaxis_avoid.benchmark.jax_learners --algo ppo --task paper_simple \\
-        --seeds 8 --total-timesteps 100000 --out results/jax_ppo_paper_simple.json
+        --seeds 8 --budget 100000 --out results/jax_ppo_paper_simple.json
+    taskset -c 0 python -m sixaxis_avoid.benchmark.jax_learners --algo dqn --seeds 8 \\
+        --budget 30000 --sb3-steps 3000
 
-One ``jax.jit`` call trains every seed at once (``jax.vmap(algo.train)``); compile time is
-measured apart from training (``lower(...).compile()``). The greedy policy is scored on the
-task's evaluation targets (``sixaxis_avoid.benchmark.tasks``) every ``--eval-freq`` env
-steps, inside the jitted loop: it acts from the start until the episode ends (the target,
-or the step cap, which a deterministic policy caught in a loop also reaches); ``success``
-is reaching the target, ``spl`` is ``optimal / max(moves, optimal)`` on success (moves
-exclude bumps), as ``sixaxis_avoid.benchmark.learners.spl``.
+Hyperparameters use Stable-Baselines3's names (``learning_rate``, ``lr_schedule``,
+``net_arch``, ``n_envs``, ``n_steps``, ``batch_size``, ``n_epochs``, ``clip_range``,
+``train_freq``, ``gradient_steps``, ``target_update_interval``, ...), so one values dict
+configures the SB3 learner and its JAX twin; :func:`rejax_config` maps them onto rejax 0.1.3.
+What maps exactly and what differs is in the "JAX learners" section of docs/PERFORMANCE.md.
 
-The defaults are suite v1's tuned SB3 values where rejax has the same knob (PPO: learning
-rate, gamma, 128x128 net, 8 envs x 64 steps, 4 minibatches of 128, 5 epochs, GAE lambda,
-entropy and clip coefficients, max_episode_steps 1000; the env's reward_scale 1e-4 and
-assist as ``learners.ENV_DEFAULTS``; SB3's tanh activation and max_grad_norm 0.5). Every knob
-is a flag; the JSON output records them all, with env steps/s, wall and compile times and
-the evaluations. Needs the ``jax-learners`` extra. (rejax's DQN is not wired here yet: it
-fixes its Q-network at 64x64 and updates its target by Polyak averaging, so SB3's tuned DQN
-values do not map onto it one to one.)
+One ``jax.jit`` call trains C candidates x S seeds (:func:`train_candidates`): the knobs
+that rejax keeps as traced pytree leaves (:data:`TRACED`: learning rate and its schedule,
+gamma, GAE lambda, clip and loss coefficients, gradient-norm cap, DQN's exploration schedule,
+learning start and target-update interval, the env's episode cap) are vmapped; the others
+fix array shapes or loop lengths (:data:`STATIC`: net, envs, rollout length, batch and
+buffer sizes, epochs) and split the candidates into separately compiled groups.
+
+The greedy policy (the most likely action of PPO's policy; DQN's arg-max Q) is scored on the
+task's evaluation targets at every checkpoint, inside the jitted loop: it acts from the start
+until the target or the step cap (the scenario's ``max_steps_per_episode``, which a
+deterministic policy caught in a loop also reaches); ``success`` is reaching the target and
+``spl`` is ``optimal / max(moves, optimal)`` on success (moves exclude bumps), as
+``sixaxis_avoid.benchmark.learners.spl``. Checkpoints fall on whole training iterations
+(PPO: ``n_envs x n_steps`` env steps, DQN: ``n_envs``); each one's env-step count is
+recorded. Needs the ``jax-learners`` extra.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib.metadata
 import json
+import math
 import time
 from pathlib import Path
 from typing import Any
@@ -34,150 +44,638 @@ import numpy as np
 
 from sixaxis_avoid._deps import require
 
+ALGOS = ("ppo", "dqn")
+
+# The values (SB3's names) live in jax_runs, which the learner registry imports without JAX.
+from sixaxis_avoid.benchmark.jax_runs import (  # noqa: E402
+    DQN_DEFAULTS,
+    PPO_DEFAULTS,
+)
+
+DEFAULTS = {"ppo": PPO_DEFAULTS, "dqn": DQN_DEFAULTS}
+
+#: Values that are traced (vmapped over candidates in one compiled call).
+TRACED: dict[str, tuple[str, ...]] = {
+    "ppo": (
+        "learning_rate", "lr_schedule", "gamma", "gae_lambda", "clip_range", "ent_coef",
+        "vf_coef", "max_grad_norm", "max_episode_steps",
+    ),
+    "dqn": (
+        "learning_rate", "lr_schedule", "gamma", "max_grad_norm", "exploration_fraction",
+        "exploration_initial_eps", "exploration_final_eps", "learning_starts",
+        "target_update_interval", "max_episode_steps",
+    ),
+}  # fmt: skip
+#: Values that fix shapes, loop lengths or the env's tables: one compiled group each.
+STATIC: dict[str, tuple[str, ...]] = {
+    "ppo": (
+        "reward_scale", "assist", "net_arch", "activation", "n_envs", "n_steps", "batch_size",
+        "n_epochs",
+    ),
+    "dqn": (
+        "reward_scale", "assist", "net_arch", "activation", "batch_size", "buffer_size",
+        "train_freq", "gradient_steps",
+    ),
+}  # fmt: skip
+LR_SCHEDULES = {"constant": 0.0, "linear": 1.0}
+ACTIVATIONS = ("tanh", "relu")
+
+
+class JaxLearnerError(ValueError):
+    """A hyperparameter value the JAX learners cannot use (names the field and value)."""
+
+
+def check_values(algo: str, values: dict[str, Any]) -> dict[str, Any]:
+    """``values`` over the algorithm's defaults, checked: unknown names and bad values raise
+    :class:`JaxLearnerError` naming the field and the value."""
+    if algo not in DEFAULTS:
+        raise JaxLearnerError(f"algo: {algo!r} is not a JAX learner ({', '.join(ALGOS)})")
+    out = {**DEFAULTS[algo], **values}
+    unknown = sorted(set(out) - set(DEFAULTS[algo]))
+    if unknown:
+        raise JaxLearnerError(
+            f"{algo}: unknown hyperparameter {unknown[0]!r} = {out[unknown[0]]!r} "
+            f"(known: {', '.join(sorted(DEFAULTS[algo]))})"
+        )
+    if out["lr_schedule"] not in LR_SCHEDULES:
+        raise JaxLearnerError(
+            f"lr_schedule: {out['lr_schedule']!r} is not a schedule (use 'constant' or 'linear')"
+        )
+    if out["activation"] not in ACTIVATIONS:
+        raise JaxLearnerError(f"activation: {out['activation']!r} is not one of {ACTIVATIONS}")
+    net = out["net_arch"]
+    if not (isinstance(net, (list, tuple)) and net and all(int(h) > 0 for h in net)):
+        raise JaxLearnerError(f"net_arch: {net!r} is not a list of positive layer sizes")
+    out["net_arch"] = [int(h) for h in net]
+    positive = ["learning_rate", "max_grad_norm", "max_episode_steps", "batch_size"]
+    positive += (
+        ["n_envs", "n_steps", "n_epochs", "clip_range"]
+        if algo == "ppo"
+        else ["buffer_size", "train_freq", "gradient_steps", "target_update_interval"]
+    )
+    for k in positive:
+        if not float(out[k]) > 0:
+            raise JaxLearnerError(f"{k}: {out[k]!r} must be positive")
+    for k in ["gamma"] + (["gae_lambda"] if algo == "ppo" else []):
+        if not 0.0 <= float(out[k]) <= 1.0:
+            raise JaxLearnerError(f"{k}: {out[k]!r} must be in [0, 1]")
+    if algo == "ppo":
+        rollout = int(out["n_envs"]) * int(out["n_steps"])
+        if rollout % int(out["batch_size"]):
+            raise JaxLearnerError(
+                f"batch_size: {out['batch_size']!r} does not divide n_envs x n_steps = {rollout}"
+            )
+    else:
+        for k in ("exploration_fraction", "exploration_initial_eps", "exploration_final_eps"):
+            if not 0.0 <= float(out[k]) <= 1.0:
+                raise JaxLearnerError(f"{k}: {out[k]!r} must be in [0, 1]")
+        if int(out["learning_starts"]) < 0:
+            raise JaxLearnerError(f"learning_starts: {out['learning_starts']!r} is negative")
+    return out
+
+
+def static_key(algo: str, values: dict[str, Any]) -> str:
+    """The compiled group a candidate belongs to (its :data:`STATIC` values)."""
+    return json.dumps({k: values[k] for k in STATIC[algo]}, sort_keys=True)
+
+
+def iteration_steps(algo: str, values: dict[str, Any]) -> int:
+    """Env steps of one training iteration (the checkpoint grain)."""
+    if algo == "ppo":
+        return int(values["n_envs"]) * int(values["n_steps"])
+    return int(values["train_freq"])
+
+
+def rejax_config(algo: str, values: dict[str, Any]) -> dict[str, Any]:
+    """rejax's static keywords for ``values`` (the traced ones are set per candidate by
+    :func:`traced_fields`)."""
+    cfg: dict[str, Any] = {
+        "agent_kwargs": {
+            "hidden_layer_sizes": tuple(values["net_arch"]),
+            "activation": values["activation"],
+        },
+        "skip_initial_evaluation": True,
+    }
+    if algo == "ppo":
+        n = int(values["n_envs"]) * int(values["n_steps"])
+        cfg.update(
+            num_envs=int(values["n_envs"]),
+            num_steps=int(values["n_steps"]),
+            num_minibatches=n // int(values["batch_size"]),
+            num_epochs=int(values["n_epochs"]),
+        )
+    else:
+        cfg.update(
+            num_envs=int(values["train_freq"]),
+            num_epochs=int(values["gradient_steps"]),
+            batch_size=int(values["batch_size"]),
+            buffer_size=int(values["buffer_size"]),
+            ddqn=False,  # SB3's DQN: the target net's max, not double DQN
+            polyak=0.0,  # SB3's hard target update (rejax: polyak 0 copies the online net)
+        )
+    return cfg
+
+
+def traced_fields(algo: str, values: dict[str, Any]) -> dict[str, float]:
+    """The traced values of one candidate, as floats named by the rejax fields they set."""
+    out = {
+        "learning_rate": float(values["learning_rate"]),
+        "lr_decay": LR_SCHEDULES[values["lr_schedule"]],
+        "gamma": float(values["gamma"]),
+        "max_grad_norm": float(values["max_grad_norm"]),
+        "max_episode_steps": float(values["max_episode_steps"]),
+    }
+    if algo == "ppo":
+        out.update(
+            gae_lambda=float(values["gae_lambda"]),
+            clip_eps=float(values["clip_range"]),
+            ent_coef=float(values["ent_coef"]),
+            vf_coef=float(values["vf_coef"]),
+        )
+    else:
+        out.update(
+            exploration_fraction=float(values["exploration_fraction"]),
+            eps_start=float(values["exploration_initial_eps"]),
+            eps_end=float(values["exploration_final_eps"]),
+            fill_buffer=float(values["learning_starts"]),
+            target_update_freq=float(values["target_update_interval"]),
+        )
+    return out
+
+
+def rejax_classes() -> dict[str, Any]:
+    """:func:`_rejax_classes`, after checking that rejax imports (names the extra if not)."""
+    require("rejax", "rejax learners (sixaxis_avoid.benchmark.jax_learners)")
+    return _rejax_classes()
+
+
+@functools.cache
+def _rejax_classes() -> dict[str, Any]:
+    """rejax's PPO and DQN with SB3's optimiser semantics and every knob that need not fix a
+    shape as a traced field:
+
+    - the learning rate is an optax schedule of traced values: constant, or linear to 0 over
+      the budget, stepped once per training iteration as SB3 steps it once per rollout
+      (``lr x (1 - lr_decay x done_fraction)``, the fraction of the budget after this
+      iteration's env steps);
+    - gradients are clipped by their global norm (SB3's ``max_grad_norm``; rejax 0.1.3 clips
+      each element, ``optax.clip``); PPO's Adam has SB3's eps 1e-5;
+    - DQN: any hidden layers (rejax 0.1.3 fixes 64x64), a traced exploration fraction,
+      learning start and target-update interval (static fields in rejax).
+    """
+    rejax = require("rejax", "rejax learners (sixaxis_avoid.benchmark.jax_learners)")
+    optax = require("optax", "rejax learners")
+    jax = require("jax", "rejax learners")
+    jnp = jax.numpy
+    from flax import linen as nn
+    from flax import struct
+    from flax.training.train_state import TrainState
+    from rejax.algos.algorithm import register_init
+    from rejax.networks import DiscreteQNetwork, EpsilonGreedyPolicy
+
+    def schedule(algo: Any, updates_per_iteration: int, first_iteration: Any = 0) -> Any:
+        """``count`` (updates so far) -> rate; ``first_iteration``: the iteration of the
+        first update (DQN's first after ``learning_starts``)."""
+        lr, decay = algo.learning_rate, algo.lr_decay
+        iters = max(int(algo.lr_iterations), 1)
+
+        def rate(count: Any) -> Any:
+            it = first_iteration + count // updates_per_iteration
+            return lr * (1.0 - decay * jnp.minimum((it + 1) / iters, 1.0))
+
+        return rate
+
+    class PPO(rejax.PPO):
+        lr_decay: Any = struct.field(pytree_node=True, default=0.0)
+        lr_iterations: int = struct.field(pytree_node=False, default=1)
+
+        @register_init
+        def initialize_network_params(self, rng: Any) -> dict[str, Any]:
+            rng, rng_actor, rng_critic = jax.random.split(rng, 3)
+            obs = jnp.empty([1, *self.env.observation_space(self.env_params).shape])
+            actor_params = self.actor.init(rng_actor, obs, rng_actor)
+            critic_params = self.critic.init(rng_critic, obs)
+            tx = optax.chain(
+                optax.clip_by_global_norm(self.max_grad_norm),
+                optax.adam(
+                    learning_rate=schedule(self, self.num_epochs * self.num_minibatches),
+                    eps=1e-5,
+                ),
+            )
+            return {
+                "actor_ts": TrainState.create(apply_fn=(), params=actor_params, tx=tx),
+                "critic_ts": TrainState.create(apply_fn=(), params=critic_params, tx=tx),
+            }
+
+    class DQN(rejax.DQN):
+        lr_decay: Any = struct.field(pytree_node=True, default=0.0)
+        lr_iterations: int = struct.field(pytree_node=False, default=1)
+        exploration_fraction: Any = struct.field(pytree_node=True, default=0.1)
+        fill_buffer: Any = struct.field(pytree_node=True, default=1000)
+        target_update_freq: Any = struct.field(pytree_node=True, default=500)
+
+        @classmethod
+        def create_agent(cls, config: dict[str, Any], env: Any, env_params: Any) -> Any:
+            kw = dict(config.pop("agent_kwargs", {}))
+            net = EpsilonGreedyPolicy(DiscreteQNetwork)(
+                hidden_layer_sizes=tuple(kw.pop("hidden_layer_sizes", (64, 64))),
+                activation=getattr(nn, kw.pop("activation", "relu")),
+                action_dim=env.action_space(env_params).n,
+            )
+            return {"agent": net}
+
+        @property
+        def epsilon_schedule(self) -> Any:
+            steps = jnp.maximum(self.exploration_fraction * self.total_timesteps, 1.0)
+
+            def eps(step: Any) -> Any:
+                f = jnp.clip(step / steps, 0.0, 1.0)
+                return self.eps_start + (self.eps_end - self.eps_start) * f
+
+            return eps
+
+        @register_init
+        def initialize_network_params(self, rng: Any) -> dict[str, Any]:
+            obs = jnp.empty([1, *self.env.observation_space(self.env_params).shape])
+            q_params = self.agent.init(rng, obs)
+            tx = optax.chain(
+                optax.clip_by_global_norm(self.max_grad_norm),
+                # rejax updates from the first iteration whose env steps before it exceed
+                # learning_starts; the schedule counts the iterations before it too.
+                optax.adam(
+                    learning_rate=schedule(
+                        self, self.num_epochs, jnp.floor(self.fill_buffer / self.num_envs) + 1
+                    )
+                ),
+            )
+            q_ts = TrainState.create(apply_fn=(), params=q_params, tx=tx)
+            return {"q_ts": q_ts, "q_target_params": q_params}
+
+    return {"ppo": PPO, "dqn": DQN}
+
+
+def counting_env(twin: Any, params: Any) -> Any:
+    """The twin as a gymnax env whose state also counts, per env, its steps and episodes and
+    the step and episode of its first reach of the target (gymnax's same-step autoreset,
+    keeping the counters): the run's first success, read after training."""
+    jax = require("jax", "rejax learners")
+    jnp = jax.numpy
+    from flax import struct
+
+    from sixaxis_avoid.jax.gymnax_compat import GymnaxEnv
+
+    class Counted(struct.PyTreeNode):
+        inner: Any
+        steps: Any
+        episodes: Any
+        first_step: Any
+        first_episode: Any
+
+    class CountingEnv(GymnaxEnv):
+        def reset_env(self, key: Any, p: Any) -> Any:
+            obs, s = self.twin.reset_env(key, p)
+            z = jnp.asarray(0, jnp.int32)
+            return obs, Counted(s, z, z, z - 1, z - 1)
+
+        def step_env(self, key: Any, state: Any, action: Any, p: Any) -> Any:
+            obs, s, r, d, info = self.twin.step_env(key, state.inner, action, p)
+            return obs, state.replace(inner=s), r, d, info
+
+        def step(self, key: Any, state: Any, action: Any, params: Any = None) -> Any:
+            p = self._params if params is None else params
+            k_step, k_reset = jax.random.split(key)
+            obs, s, r, d, info = self.twin.step_env(k_step, state.inner, action, p)
+            obs_re, s_re = self.twin.reset_env(k_reset, p)
+            inner = jax.tree_util.tree_map(lambda a, b: jax.lax.select(d, a, b), s_re, s)
+            steps = state.steps + 1
+            new_first = jnp.logical_and(state.first_step < 0, info["terminated"])
+            counted = Counted(
+                inner,
+                steps,
+                state.episodes + d.astype(jnp.int32),
+                jnp.where(new_first, steps, state.first_step),
+                jnp.where(new_first, state.episodes, state.first_episode),
+            )
+            return jax.lax.select(d, obs_re, obs), counted, r, d, info
+
+        def get_obs(self, state: Any, params: Any = None, key: Any = None) -> Any:
+            return self.twin.get_obs(state.inner, params if params is not None else self._params)
+
+    return CountingEnv(twin, params)
+
+
+class Compiled:
+    """One compiled group: the base algorithm of a group's static values on one task, and
+    the jitted function that trains C candidates x S seeds of it."""
+
+    def __init__(
+        self, algo: str, task: Any, values: dict[str, Any], budget: int, checkpoints: list[int]
+    ) -> None:
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
+        from sixaxis_avoid.jax import make
+
+        self.algo, self.task, self.values = algo, task, values
+        twin, params = make(
+            task.scenario,
+            reward_scale=float(values["reward_scale"]),
+            assist=bool(values["assist"]),
+            max_episode_steps=int(values["max_episode_steps"]),
+            random_target=task.is_goal,
+        )
+        self.twin, self.params = twin, params
+        index = {tuple(int(v) for v in c): i for i, c in enumerate(np.asarray(params.target_cells))}
+        self.targets = [index[tuple(int(v) for v in t)] for t in task.eval_targets]
+        self.optimal = [int(o) for o in task.optimal_lengths]
+        self.eval_cap = int(task.scenario.max_steps_per_episode)
+        step = iteration_steps(algo, values)
+        iters = sorted({max(1, math.ceil(int(c) / step)) for c in checkpoints if int(c) > 0})
+        total = max(1, math.ceil(int(budget) / step))
+        iters = [i for i in iters if i < total] + [total]
+        self.iteration_steps = step
+        self.checkpoint_iterations = iters
+        self.env_steps = [i * step for i in iters]
+        cfg = rejax_config(algo, values)
+        cls = rejax_classes()[algo]
+        env = counting_env(twin, params)
+        base = cls.create(
+            env=env,
+            env_params=params,
+            total_timesteps=total * step,
+            eval_freq=total * step,
+            lr_iterations=total,
+            **cfg,
+        )
+        self.base = base
+        segments = np.diff([0, *iters]).astype(np.int32)
+        evaluate = self.evaluator()
+
+        def train_one(fields: dict[str, Any], key: Any) -> Any:
+            f = dict(fields)
+            mes = f.pop("max_episode_steps").astype(jnp.int32)
+            a = base.replace(env_params=base.env_params._replace(max_steps_in_episode=mes), **f)
+            ts = a.init_state(key)
+
+            def segment(ts: Any, n: Any) -> Any:
+                ts = jax.lax.fori_loop(0, n, lambda _, t: a.train_iteration(t), ts)
+                return ts, evaluate(a, ts)
+
+            ts, ev = jax.lax.scan(segment, ts, jnp.asarray(segments))
+            es = ts.env_state
+            first = jnp.where(es.first_step >= 0, (es.first_step - 1) * a.num_envs, -1)
+            first = jnp.where(
+                first >= 0, first + jnp.arange(a.num_envs) + 1, jnp.iinfo(jnp.int32).max
+            )
+            j = jnp.argmin(first)
+            out = {
+                "success": ev[0],
+                "spl": ev[1],
+                "reached": ev[2],
+                "moves": ev[3],
+                "first_success_env_steps": jnp.where(
+                    first[j] == jnp.iinfo(jnp.int32).max, -1, first[j]
+                ),
+                "first_success_episode": es.first_episode[j] * a.num_envs,
+                "episodes": es.episodes.sum(),
+            }
+            return out, self.policy_params(ts)
+
+        self._train = jax.jit(jax.vmap(jax.vmap(train_one, in_axes=(None, 0)), in_axes=(0, None)))
+        self._executables: dict[tuple[int, int], Any] = {}
+
+    def policy_params(self, ts: Any) -> Any:
+        return ts.actor_ts.params if self.algo == "ppo" else ts.q_ts.params
+
+    def greedy(self, algo: Any, params: Any, obs: Any) -> Any:
+        """The greedy action of the policy ``params`` at ``obs``."""
+        jnp = require("jax.numpy", "rejax learners")
+        if self.algo == "ppo":
+            dist = algo.actor.apply(params, obs[None], method="_action_dist")
+            return jnp.argmax(dist.logits[0])
+        return jnp.argmax(algo.agent.apply(params, obs[None])[0])
+
+    def evaluator(self) -> Any:
+        """``evaluate(algo, ts) -> (success, spl, reached, moves)`` of the greedy policy on
+        the evaluation targets."""
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
+        twin, targets_a = self.twin, jnp.asarray(self.targets, jnp.int32)
+        optimal_a = jnp.asarray(self.optimal, jnp.float32)
+        cap = self.eval_cap
+
+        def evaluate(algo: Any, ts: Any) -> Any:
+            params = self.policy_params(ts)
+            key = jax.random.PRNGKey(0)  # the greedy rollout draws nothing
+
+            def one(t: Any) -> Any:
+                p = algo.env_params._replace(reset_target=t, max_steps_in_episode=jnp.int32(cap))
+                obs, st = twin.reset_env(key, p)
+
+                def body(c: Any) -> Any:
+                    obs, st, _, _, moves, n = c
+                    a = self.greedy(algo, params, obs)
+                    obs, st, _, d, info = twin.step_env(key, st, a, p)
+                    moves = moves + jnp.logical_not(info["collided"]).astype(jnp.int32)
+                    return obs, st, d, info["terminated"], moves, n + 1
+
+                init = (obs, st, jnp.bool_(False), jnp.bool_(False), jnp.int32(0), jnp.int32(0))
+                c = jax.lax.while_loop(lambda c: jnp.logical_and(~c[2], c[5] < cap), body, init)
+                return c[3], c[4]
+
+            reached, moves = jax.vmap(one)(targets_a)
+            spl = jnp.where(reached, optimal_a / jnp.maximum(moves, optimal_a), 0.0)
+            return reached.astype(jnp.float32).mean(), spl.mean(), reached, moves
+
+        return evaluate
+
+    def paths(self, params: Any) -> list[list[list[int]] | None]:
+        """The greedy paths (cells, bumps excluded) of one trained policy from the start to
+        each evaluation target; None where it does not reach the target within the cap."""
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
+        roll = self._roll if hasattr(self, "_roll") else self._make_roll()
+        start = [int(v) for v in np.asarray(self.params.cells)[int(self.params.start_state)]]
+        out: list[list[list[int]] | None] = []
+        for t in self.targets:
+            cells, moved, term = (np.asarray(x) for x in roll(params, jnp.int32(t)))
+            if not term.any():
+                out.append(None)
+                continue
+            end = int(np.argmax(term)) + 1
+            out.append(
+                [start] + [[int(v) for v in c] for c, m in zip(cells[:end], moved[:end]) if m]
+            )
+        return out
+
+    def _make_roll(self) -> Any:
+        """The jitted greedy rollout of :meth:`paths` (built once)."""
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
+        twin, base, cap = self.twin, self.base, self.eval_cap
+
+        @jax.jit
+        def roll(params: Any, t: Any) -> Any:
+            p = self.params._replace(reset_target=t, max_steps_in_episode=jnp.int32(cap))
+            key = jax.random.PRNGKey(0)
+            obs, st = twin.reset_env(key, p)
+
+            def body(c: Any, _: Any) -> Any:
+                obs, st, done = c
+                a = self.greedy(base, params, obs)
+                obs2, st2, _, d, info = twin.step_env(key, st, a, p)
+                moved = jnp.logical_and(~done, ~info["collided"])
+                out = (info["cell"], moved, jnp.logical_and(~done, info["terminated"]))
+                keep = jax.tree_util.tree_map(
+                    lambda x, y: jnp.where(done, x, y), (obs, st), (obs2, st2)
+                )
+                return (keep[0], keep[1], jnp.logical_or(done, d)), out
+
+            _, (cells, moved, term) = jax.lax.scan(body, (obs, st, jnp.bool_(False)), None, cap)
+            return cells, moved, term
+
+        self._roll = roll
+        return roll
+
+    def run(self, candidates: list[dict[str, Any]], seeds: list[int]) -> dict[str, Any]:
+        """Train every candidate (this group's static values) on every seed in one call."""
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
+        fields = [traced_fields(self.algo, c) for c in candidates]
+        batch = {k: jnp.asarray([f[k] for f in fields], jnp.float32) for k in fields[0]}
+        keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
+        t0 = time.perf_counter()
+        shape = (len(candidates), len(seeds))
+        if shape not in self._executables:  # compiled once per (candidates, seeds) shape
+            self._executables[shape] = self._train.lower(batch, keys).compile()
+        compiled = self._executables[shape]
+        compile_s = time.perf_counter() - t0
+        t0, c0 = time.perf_counter(), time.process_time()
+        out, params = compiled(batch, keys)
+        out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        return {
+            "out": out,  # arrays (C, S, ...)
+            "params": params,
+            "compile_s": compile_s,
+            "train_wall_s": wall,
+            "train_cpu_s": cpu,
+            "env_steps": self.env_steps,
+            "env_steps_per_s": len(candidates) * len(seeds) * self.env_steps[-1] / wall,
+        }
+
+
+_GROUPS: dict[str, Compiled] = {}
+
+
+def compiled_group(
+    algo: str, task: Any, values: dict[str, Any], budget: int, checkpoints: list[int]
+) -> Compiled:
+    """The :class:`Compiled` group of ``values``' static knobs on ``task`` (built once per
+    process: a second tuning or run group of the same shapes reuses its executable)."""
+    key = json.dumps(
+        [algo, task.id, task.kind, task.spec, static_key(algo, values), budget, checkpoints],
+        sort_keys=True,
+        default=str,
+    )
+    if key not in _GROUPS:
+        _GROUPS[key] = Compiled(algo, task, values, budget, checkpoints)
+    return _GROUPS[key]
+
+
+def train_candidates(
+    algo: str,
+    task: Any,
+    candidates: list[dict[str, Any]],
+    seeds: list[int],
+    budget: int,
+    checkpoints: list[int] | None = None,
+) -> list[dict[str, Any]]:
+    """Train every candidate (a values dict) x every seed on ``task`` for ``budget`` env
+    steps: one compiled, vmapped call per group of equal :data:`STATIC` values. Returns one
+    entry per candidate, in order: its values, group, per-seed curves (``success``,
+    ``spl``: lists of S lists, one value per checkpoint), ``env_steps`` of the checkpoints,
+    and the group's timing."""
+    checked = [check_values(algo, c) for c in candidates]
+    groups: dict[str, list[int]] = {}
+    for i, c in enumerate(checked):
+        groups.setdefault(static_key(algo, c), []).append(i)
+    results: list[dict[str, Any] | None] = [None] * len(checked)
+    for g, idx in enumerate(groups.values()):
+        comp = compiled_group(algo, task, checked[idx[0]], budget, checkpoints or [budget])
+        r = comp.run([checked[i] for i in idx], seeds)
+        for j, i in enumerate(idx):
+            results[i] = {
+                "values": checked[i],
+                "group": g,
+                "group_size": len(idx),
+                "env_steps": r["env_steps"],
+                "success": r["out"]["success"][j].tolist(),
+                "spl": r["out"]["spl"][j].tolist(),
+                "compile_s": r["compile_s"],
+                "train_wall_s": r["train_wall_s"],
+                "train_cpu_s": r["train_cpu_s"],
+            }
+    return [r for r in results if r is not None]
+
+
+# ------------------------------------------------------------------------------------------
+# CLI
+
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--algo", choices=("ppo",), default="ppo", help="rejax's PPO")
+    p.add_argument("--algo", choices=ALGOS, default="ppo", help="rejax's PPO or DQN")
     p.add_argument("--suite", default="v1", help="suite whose task --task names")
     p.add_argument("--task", default="paper_simple")
     p.add_argument("--seeds", type=int, default=8, help="seeds 0..N-1, vmapped")
     p.add_argument("--seed-offset", type=int, default=0, help="first seed")
-    p.add_argument("--total-timesteps", type=int, default=100_000, help="env steps per seed")
-    p.add_argument("--eval-freq", type=int, default=10_240, help="env steps between evaluations")
-    # Env (sixaxis_avoid.jax.make keywords).
-    p.add_argument("--reward-scale", type=float, default=1e-4)
-    p.add_argument("--assist", type=int, choices=(0, 1), default=1)
-    p.add_argument("--max-episode-steps", type=int, default=1000)
-    # Shared.
-    p.add_argument("--learning-rate", type=float, default=0.0025083101485988907)
-    p.add_argument("--gamma", type=float, default=0.9)
-    p.add_argument("--max-grad-norm", type=float, default=0.5)
-    p.add_argument("--hidden", default="128,128", help="hidden layer sizes")
-    p.add_argument("--activation", default="tanh", help="a flax.linen activation name")
-    p.add_argument("--num-envs", type=int, default=8)
-    # PPO.
-    p.add_argument("--num-steps", type=int, default=64)
-    p.add_argument("--num-minibatches", type=int, default=4)
-    p.add_argument("--num-epochs", type=int, default=5)
-    p.add_argument("--gae-lambda", type=float, default=0.9)
-    p.add_argument("--clip-eps", type=float, default=0.1)
-    p.add_argument("--ent-coef", type=float, default=0.00011201827711749114)
-    p.add_argument("--vf-coef", type=float, default=0.5)
+    p.add_argument("--budget", type=int, default=100_000, help="env steps per seed")
+    p.add_argument("--evaluations", type=int, default=10, help="evenly spaced checkpoints")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=JSON",
+        help="a hyperparameter (SB3's name), e.g. --set learning_rate=1e-3 --set "
+        "net_arch=[64,64] --set lr_schedule='\"linear\"'; the others are the algorithm's "
+        "defaults (jax_learners.PPO_DEFAULTS / DQN_DEFAULTS)",
+    )
     p.add_argument(
         "--sb3-steps",
         type=int,
         default=0,
-        help="also train SB3 PPO with the same values for this many env steps (one seed, one "
-        "torch thread, the native SixAxisVecEnv) and record its env steps/s",
+        help="also train SB3's PPO or DQN with the same values for this many env steps (one "
+        "seed, one torch thread, the native SixAxisVecEnv) and record its env steps/s",
     )
     p.add_argument("--out", type=Path, default=None, help="JSON file (also printed)")
     return p.parse_args(argv)
 
 
-def algo_config(a: argparse.Namespace) -> dict[str, Any]:
-    """rejax's keywords for PPO."""
-    cfg: dict[str, Any] = {
-        "total_timesteps": a.total_timesteps,
-        "eval_freq": a.eval_freq,
-        "learning_rate": a.learning_rate,
-        "gamma": a.gamma,
-        "max_grad_norm": a.max_grad_norm,
-        "num_envs": a.num_envs,
-        "agent_kwargs": {
-            "hidden_layer_sizes": tuple(int(h) for h in a.hidden.split(",")),
-            "activation": a.activation,
-        },
-    }
-    cfg.update(
-        num_steps=a.num_steps,
-        num_minibatches=a.num_minibatches,
-        num_epochs=a.num_epochs,
-        gae_lambda=a.gae_lambda,
-        clip_eps=a.clip_eps,
-        ent_coef=a.ent_coef,
-        vf_coef=a.vf_coef,
-    )
-    return cfg
-
-
-def greedy_action_fn(algo: Any):
-    """``act(ts, obs) -> action`` of PPO's greedy policy (the most likely action)."""
-    jnp = require("jax.numpy", "rejax learners")
-
-    def act(ts, obs):
-        dist = algo.actor.apply(ts.actor_ts.params, obs[None], method="_action_dist")
-        return jnp.argmax(dist.logits[0])
-
-    return act
-
-
-def make_eval(twin: Any, params: Any, targets: list[int], optimal: list[int]):
-    """The eval callback: greedy success and SPL per evaluation target."""
-    jax = require("jax", "rejax learners")
-    jnp = jax.numpy
-    targets_a = jnp.asarray(targets, jnp.int32)
-    optimal_a = jnp.asarray(optimal, jnp.float32)
-    cap = int(params.max_steps_in_episode)
-
-    def callback(algo, ts, rng):
-        act = greedy_action_fn(algo)
-
-        def one(t):
-            p = params._replace(reset_target=t)
-            obs, st = twin.reset_env(rng, p)
-
-            def body(c):
-                obs, st, _, _, moves, n = c
-                a = act(ts, obs)
-                obs, st, _, d, info = twin.step_env(rng, st, a, p)
-                moves = moves + jnp.logical_not(info["collided"]).astype(jnp.int32)
-                return obs, st, d, info["terminated"], moves, n + 1
-
-            init = (obs, st, jnp.bool_(False), jnp.bool_(False), jnp.int32(0), jnp.int32(0))
-            c = jax.lax.while_loop(lambda c: jnp.logical_and(~c[2], c[5] < cap), body, init)
-            return c[3], c[4]
-
-        reached, moves = jax.vmap(one)(targets_a)
-        spl = jnp.where(reached, optimal_a / jnp.maximum(moves, optimal_a), 0.0)
-        return {"success": reached.astype(jnp.float32).mean(), "spl": spl.mean()}
-
-    return callback
+def parse_sets(sets: list[str]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for s in sets:
+        name, eq, raw = s.partition("=")
+        if not eq:
+            raise JaxLearnerError(f"--set: {s!r} is not NAME=JSON")
+        try:
+            out[name] = json.loads(raw)
+        except json.JSONDecodeError:
+            out[name] = raw  # a bare string, e.g. lr_schedule=linear
+    return out
 
 
 def run(a: argparse.Namespace) -> dict[str, Any]:
     jax = require("jax", "rejax learners")
-    rejax = require("rejax", "rejax learners (sixaxis_avoid.benchmark.jax_learners)")
     from sixaxis_avoid.benchmark.tasks import load_suite
-    from sixaxis_avoid.jax import make
-    from sixaxis_avoid.jax.gymnax_compat import as_gymnax
 
+    values = check_values(a.algo, parse_sets(a.set))
     task = load_suite(a.suite).task(a.task)
-    twin, params = make(
-        task.scenario,
-        reward_scale=a.reward_scale,
-        assist=bool(a.assist),
-        max_episode_steps=a.max_episode_steps,
-        random_target=task.is_goal,
-    )
-    index = {tuple(int(v) for v in c): i for i, c in enumerate(np.asarray(params.target_cells))}
-    targets = [index[tuple(t)] for t in task.eval_targets]
-    cfg = algo_config(a)
-    algo = rejax.PPO.create(env=as_gymnax(twin, params), env_params=params, **cfg)
-    algo = algo.replace(eval_callback=make_eval(twin, params, targets, task.optimal_lengths))
+    n = max(1, a.evaluations)
+    checkpoints = [round(a.budget * (i + 1) / n) for i in range(n)]
     seeds = list(range(a.seed_offset, a.seed_offset + a.seeds))
-    keys = jax.vmap(jax.random.PRNGKey)(jax.numpy.asarray(seeds))
-    train = jax.jit(jax.vmap(algo.train))
-    t0 = time.perf_counter()
-    compiled = train.lower(keys).compile()
-    compile_s = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    _, evaluation = compiled(keys)
-    evaluation = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(evaluation))
-    wall = time.perf_counter() - t0
-    success, spl = evaluation["success"], evaluation["spl"]  # (seeds, evaluations)
-    n_evals = success.shape[1]
-    env_steps = [min(i * a.eval_freq, a.total_timesteps) for i in range(n_evals)]
-    steps_done = len(seeds) * a.total_timesteps
+    comp = Compiled(a.algo, task, values, a.budget, checkpoints)
+    r = comp.run([values], seeds)
+    success, spl = r["out"]["success"][0], r["out"]["spl"][0]  # (seeds, checkpoints)
     return {
         "algo": a.algo,
         "rejax_version": importlib.metadata.version("rejax"),
@@ -186,16 +684,16 @@ def run(a: argparse.Namespace) -> dict[str, Any]:
         "suite": a.suite,
         "seeds": seeds,
         "flags": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(a).items()},
-        "rejax_config": {k: v for k, v in cfg.items() if k != "agent_kwargs"}
-        | {
-            "agent_kwargs": {
-                k: list(v) if isinstance(v, tuple) else v for k, v in cfg["agent_kwargs"].items()
-            }
-        },
-        "compile_s": compile_s,
-        "train_wall_s": wall,
-        "env_steps_per_s": steps_done / wall,
-        "eval_env_steps": env_steps,
+        "values": values,
+        "rejax_config": json.loads(json.dumps(rejax_config(a.algo, values), default=list)),
+        "compile_s": r["compile_s"],
+        "train_wall_s": r["train_wall_s"],
+        "train_cpu_s": r["train_cpu_s"],
+        "env_steps_per_s": r["env_steps_per_s"],
+        # On a loaded machine the process's CPU time is the fairer clock.
+        "env_steps_per_cpu_s": len(seeds) * r["env_steps"][-1] / r["train_cpu_s"],
+        "updates_per_env_step": updates_per_env_step(a.algo, values),
+        "eval_env_steps": r["env_steps"],
         "success": success.tolist(),
         "spl": spl.tolist(),
         "final_success_mean": float(success[:, -1].mean()),
@@ -205,43 +703,78 @@ def run(a: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def sb3_speed(a: argparse.Namespace) -> dict[str, Any]:
-    """SB3 PPO with the same values (SB3's names), timed: env steps/s."""
+def updates_per_env_step(algo: str, values: dict[str, Any]) -> float:
+    """Gradient steps per env step (the same for rejax and SB3 at the same values)."""
+    if algo == "ppo":
+        n = int(values["n_envs"]) * int(values["n_steps"])
+        return int(values["n_epochs"]) * (n // int(values["batch_size"])) / n
+    return int(values["gradient_steps"]) / int(values["train_freq"])
+
+
+def sb3_speed(a: argparse.Namespace, values: dict[str, Any]) -> dict[str, Any]:
+    """SB3's PPO or DQN with the same values, timed: env steps/s on one torch thread."""
     torch = require("torch", "the SB3 comparison")
     sb3 = require("stable_baselines3", "the SB3 comparison")
+    from sixaxis_avoid.benchmark.learners import linear_schedule
     from sixaxis_avoid.benchmark.tasks import load_suite
     from sixaxis_avoid.sb3 import SixAxisVecEnv
 
     task = load_suite(a.suite).task(a.task)
     torch.set_num_threads(1)
-    kw = {"reward_scale": a.reward_scale, "assist": bool(a.assist)}
+    kw: dict[str, Any] = {"reward_scale": values["reward_scale"], "assist": values["assist"]}
     if task.is_goal:
         kw["random_target"] = True
+    n_envs = int(values["n_envs"]) if a.algo == "ppo" else 1
     venv = SixAxisVecEnv(
-        a.num_envs, seed=a.seed_offset, scenario=task.scenario,
-        max_episode_steps=a.max_episode_steps, **kw,
+        n_envs, seed=a.seed_offset, scenario=task.scenario,
+        max_episode_steps=int(values["max_episode_steps"]), **kw,
     )  # fmt: skip
-    activation = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[a.activation]
-    model = sb3.PPO(
-        "MlpPolicy", venv, learning_rate=a.learning_rate, gamma=a.gamma, n_steps=a.num_steps,
-        batch_size=a.num_envs * a.num_steps // a.num_minibatches, n_epochs=a.num_epochs,
-        gae_lambda=a.gae_lambda, clip_range=a.clip_eps, ent_coef=a.ent_coef, vf_coef=a.vf_coef,
-        max_grad_norm=a.max_grad_norm, seed=a.seed_offset, device="cpu", verbose=0,
-        policy_kwargs={"net_arch": [int(h) for h in a.hidden.split(",")],
-                       "activation_fn": activation},
-    )  # fmt: skip
-    t0 = time.perf_counter()
+    activation = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[values["activation"]]
+    lr = values["learning_rate"]
+    if values["lr_schedule"] == "linear":
+        lr = linear_schedule(float(lr))
+    common = {
+        "learning_rate": lr, "gamma": values["gamma"], "max_grad_norm": values["max_grad_norm"],
+        "batch_size": values["batch_size"], "seed": a.seed_offset, "device": "cpu", "verbose": 0,
+        "policy_kwargs": {"net_arch": values["net_arch"], "activation_fn": activation},
+    }  # fmt: skip
+    if a.algo == "ppo":
+        model = sb3.PPO(
+            "MlpPolicy", venv, n_steps=values["n_steps"], n_epochs=values["n_epochs"],
+            gae_lambda=values["gae_lambda"], clip_range=values["clip_range"],
+            ent_coef=values["ent_coef"], vf_coef=values["vf_coef"], **common,
+        )  # fmt: skip
+    else:
+        model = sb3.DQN(
+            "MlpPolicy", venv, buffer_size=values["buffer_size"],
+            learning_starts=values["learning_starts"], train_freq=values["train_freq"],
+            gradient_steps=values["gradient_steps"],
+            target_update_interval=values["target_update_interval"],
+            exploration_fraction=values["exploration_fraction"],
+            exploration_initial_eps=values["exploration_initial_eps"],
+            exploration_final_eps=values["exploration_final_eps"], **common,
+        )  # fmt: skip
+    t0, c0 = time.perf_counter(), time.process_time()
     model.learn(a.sb3_steps)
-    wall = time.perf_counter() - t0
-    return {"env_steps": a.sb3_steps, "wall_s": wall, "env_steps_per_s": a.sb3_steps / wall}
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    return {
+        "algo": a.algo,
+        "env_steps": a.sb3_steps,
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "env_steps_per_s": a.sb3_steps / wall,
+        "env_steps_per_cpu_s": a.sb3_steps / cpu,
+        "updates_per_env_step": updates_per_env_step(a.algo, values),
+    }
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     a = parse_args(argv)
     out = run(a)
     if a.sb3_steps > 0:
-        out["sb3_ppo"] = sb3_speed(a)
-        out["speedup_vs_sb3"] = out["env_steps_per_s"] / out["sb3_ppo"]["env_steps_per_s"]
+        out["sb3"] = sb3_speed(a, out["values"])
+        out["speedup_vs_sb3"] = out["env_steps_per_s"] / out["sb3"]["env_steps_per_s"]
+        out["speedup_vs_sb3_cpu"] = out["env_steps_per_cpu_s"] / out["sb3"]["env_steps_per_cpu_s"]
     text = json.dumps(out, indent=1)
     if a.out is not None:
         a.out.parent.mkdir(parents=True, exist_ok=True)

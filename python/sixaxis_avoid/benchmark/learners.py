@@ -575,6 +575,11 @@ BUILTIN: dict[str, type[Learner]] = {
 }
 
 
+# The JAX learners (jax_ppo, jax_dqn; family "jax"), by name but not in BUILTIN (the default
+# study and its tests run BUILTIN): their module imports JAX only when they run.
+from sixaxis_avoid.benchmark.jax_runs import LEARNERS as JAX_LEARNERS  # noqa: E402
+
+
 class LearnerError(ValueError):
     """A learner name that is neither built in nor an importable ``module:Class``."""
 
@@ -583,6 +588,8 @@ def resolve(name: str) -> type[Learner]:
     """A built-in learner by name, or a user's as ``module:Class``."""
     if name in BUILTIN:
         return BUILTIN[name]
+    if name in JAX_LEARNERS:
+        return JAX_LEARNERS[name]
     if ":" not in name:
         raise LearnerError(
             f"learner {name!r}: not built in ({', '.join(BUILTIN)}) and not module:Class"

@@ -205,6 +205,10 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
     on where it ran."""
     import sixaxis_avoid as sa
 
+    if spec.get("family") == "jax":  # trains its seeds vmapped: docs/PERFORMANCE.md
+        from sixaxis_avoid.benchmark.jax_runs import run_group
+
+        return run_group([spec])[0]
     try:  # one thread per run: the same result on any machine, and no oversubscription
         import torch
 
@@ -417,16 +421,24 @@ def run_study(
         bar.update(1)
 
     started = False
+    jax_specs = [s for s in todo if s.get("family") == "jax"]
+    if jax_specs:  # all seeds of a (learner, task) in one vmapped call, in this process
+        from sixaxis_avoid.benchmark.jax_runs import groups, run_group
+
+        for group in groups(jax_specs):
+            for record in run_group(group):
+                done(record)
+    rest = [s for s in todo if s.get("family") != "jax"]
     if not use_ray:
-        for s in todo:
+        for s in rest:
             done(execute_run(s))
-    elif todo:
+    elif rest:
         import ray
 
         started = init_ray(address, num_cpus)
         try:
             remote = ray.remote(num_cpus=1, max_retries=0)(execute_run)
-            pending = {remote.remote(s): s for s in todo}
+            pending = {remote.remote(s): s for s in rest}
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)
                 spec = pending.pop(ready[0])

@@ -1,0 +1,278 @@
+"""Tuning of the JAX learners at one budget: a seeded random search whose trials are all
+trained at once, vmapped, on the suite's tuning tasks::
+
+    python -m sixaxis_avoid.benchmark.jax_tune --algo ppo --suite v1 --budget 30000 \\
+        --trials 32 --seeds 3 --out docs/results/v2-tuning/jax_ppo-30000.json
+
+- The ``--trials`` candidates are drawn up front from :func:`space` with ``--sampler-seed``
+  (a random search: every trial is known before any is scored, which is what lets one
+  compiled call train them all; a sequential sampler such as TPE would need the scores of
+  earlier trials first). Knobs that fix shapes (:data:`jax_learners.STATIC`) are drawn
+  ``--groups`` times and each trial takes one of those draws in turn, so the search
+  compiles ``groups x tasks`` programs; the traced knobs are drawn per trial.
+- Each trial is trained on ``--seeds`` seeds (``tuning.seeds`` of the suite first, then
+  consecutive ones) on every tuning task (``tuning.tasks``) for ``--budget`` env steps
+  (on a goal task too: counted over all its targets).
+- The objective is the reported metric: the mean final score (SPL over the evaluation
+  targets, at the budget) over tasks and seeds.
+- Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
+  objective); the best goes into the hyperparameter file (``--hyperparams``, default
+  ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
+  merged into what the file holds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import shlex
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sixaxis_avoid.benchmark import jax_learners as jl
+from sixaxis_avoid.benchmark._io import atomic_write_text
+from sixaxis_avoid.benchmark.hyperparams import HYPERPARAMS_DIR
+
+LEARNER = {"ppo": "jax_ppo", "dqn": "jax_dqn"}
+
+
+def space(algo: str, rng: np.random.Generator) -> tuple[dict[str, Any], dict[str, Any]]:
+    """One draw of the search space: ``(static, traced)`` values (SB3's names). The ranges
+    are the SB3 learners' (``hyperparams.suggest``), with the learning-rate schedule added."""
+    c = lambda xs: xs[int(rng.integers(len(xs)))]  # noqa: E731
+    logu = lambda lo, hi: float(np.exp(rng.uniform(np.log(lo), np.log(hi))))  # noqa: E731
+    traced: dict[str, Any] = {
+        "learning_rate": logu(1e-4, 3e-3),
+        "lr_schedule": c(["constant", "linear"]),
+        "gamma": c([0.9, 0.95, 0.98, 0.99, 0.995]),
+        "max_episode_steps": c([100, 200, 500, 1000]),
+    }
+    if algo == "ppo":
+        n_envs, n_steps = c([4, 8, 16]), c([32, 64, 128, 256])
+        static = {
+            "net_arch": c([[64, 64], [128, 128], [256, 256]]),
+            "n_envs": n_envs,
+            "n_steps": n_steps,
+            "batch_size": min(c([32, 64, 128, 256]), n_envs * n_steps),
+            "n_epochs": c([3, 5, 10]),
+        }
+        traced.update(
+            gae_lambda=c([0.8, 0.9, 0.95, 0.98, 1.0]),
+            ent_coef=logu(1e-4, 0.1),
+            clip_range=c([0.1, 0.2, 0.3]),
+        )
+        return static, traced
+    if algo == "dqn":
+        gradient_steps = c([1, 2, 4])
+        replay_ratio = c([0.0625, 0.125, 0.25, 0.5])
+        static = {
+            "net_arch": c([[64, 64], [128, 128], [256, 256]]),
+            "batch_size": c([32, 64, 128, 256]),
+            "buffer_size": c([10_000, 50_000, 100_000]),
+            "train_freq": round(gradient_steps / replay_ratio),
+            "gradient_steps": gradient_steps,
+        }
+        traced.update(
+            learning_starts=c([0, 500, 1000, 5000]),
+            target_update_interval=c([100, 500, 1000, 5000]),
+            exploration_fraction=float(rng.uniform(0.05, 0.5)),
+            exploration_final_eps=float(rng.uniform(0.01, 0.2)),
+        )
+        return static, traced
+    raise jl.JaxLearnerError(f"algo: {algo!r} has no search space ({', '.join(jl.ALGOS)})")
+
+
+def draw(algo: str, trials: int, groups: int, seed: int) -> list[dict[str, Any]]:
+    """``trials`` candidates: ``groups`` static draws, each trial taking one in turn."""
+    if trials < 1 or groups < 1:
+        raise jl.JaxLearnerError(f"trials, groups: {trials!r}, {groups!r} must be positive")
+    rng = np.random.default_rng(seed)
+    statics = [space(algo, rng)[0] for _ in range(groups)]
+    return [
+        jl.check_values(algo, {**statics[i % groups], **space(algo, rng)[1]}) for i in range(trials)
+    ]
+
+
+def tune(
+    algo: str,
+    suite: Any,
+    budget: int,
+    candidates: list[dict[str, Any]],
+    seeds: list[int],
+    tasks: list[Any] | None = None,
+    log: Any = None,
+) -> dict[str, Any]:
+    """Train every candidate on every tuning task and seed; score and rank them."""
+    tasks = suite.tuning_tasks if tasks is None else tasks
+    if not tasks:
+        raise jl.JaxLearnerError(f"suite {suite.name!r}: tuning.tasks is empty")
+    per_task: dict[str, list[dict[str, Any]]] = {}
+    timing: list[dict[str, Any]] = []
+    t0, c0 = time.perf_counter(), time.process_time()
+    for task in tasks:
+        t1 = time.perf_counter()
+        per_task[task.id] = jl.train_candidates(
+            algo, task, candidates, seeds, budget, suite.checkpoints(budget)
+        )
+        groups = {r["group"]: r for r in per_task[task.id]}
+        timing.append(
+            {
+                "task": task.id,
+                "wall_s": time.perf_counter() - t1,
+                "compile_s": sum(r["compile_s"] for r in groups.values()),
+                "train_wall_s": sum(r["train_wall_s"] for r in groups.values()),
+            }
+        )
+        if log:
+            log(f"{task.id}: {timing[-1]['wall_s']:.0f} s")
+    trials = []
+    for i, values in enumerate(candidates):
+        scores = {t: [row[-1] for row in per_task[t][i]["spl"]] for t in per_task}
+        trials.append(
+            {
+                "number": i,
+                "values": values,
+                "group": per_task[tasks[0].id][i]["group"],
+                "objective": float(np.mean([s for v in scores.values() for s in v])),
+                "final_score": scores,
+                "final_success": {
+                    t: [row[-1] for row in per_task[t][i]["success"]] for t in per_task
+                },
+                "curves": {
+                    t: {
+                        "env_steps": per_task[t][i]["env_steps"],
+                        "score": per_task[t][i]["spl"],
+                        "success": per_task[t][i]["success"],
+                    }
+                    for t in per_task
+                },
+            }
+        )
+    best = max(trials, key=lambda tr: (tr["objective"], -tr["number"]))
+    return {
+        "trials": trials,
+        "best_trial": best["number"],
+        "best_value": best["objective"],
+        "wall_time_s": time.perf_counter() - t0,
+        "cpu_time_s": time.process_time() - c0,
+        "per_task_timing": timing,
+    }
+
+
+def record_best(
+    path: Path, learner: str, budget: int, values: dict[str, Any], entry: dict[str, Any]
+) -> dict[str, Any]:
+    """Merge ``learners[learner]["by_budget"][budget]`` into the hyperparameter file (other
+    learners and budgets stay)."""
+    data: dict[str, Any] = {"learners": {}}
+    if path.exists():
+        data = json.loads(path.read_text())
+        if not isinstance(data.get("learners"), dict):
+            raise jl.JaxLearnerError(f"{path}: field 'learners' must be an object")
+    data.setdefault(
+        "note",
+        "Suite v2's hyperparameters, tuned per budget: learners[<name>].by_budget[<env "
+        "steps>] holds the values a run at that budget uses, the command that chose them, "
+        "its trials file and objective (mean final SPL over the tuning tasks and seeds).",
+    )
+    by_budget = data["learners"].setdefault(learner, {}).setdefault("by_budget", {})
+    by_budget[str(int(budget))] = {"values": values, "status": "tuned", **entry}
+    atomic_write_text(path, json.dumps(data, indent=1) + "\n")
+    return data
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--algo", choices=jl.ALGOS, default="ppo")
+    p.add_argument("--suite", default="v1", help="suite whose tuning.tasks are scored")
+    p.add_argument("--tasks", default=None, help="comma-separated subset of the tuning tasks")
+    p.add_argument("--budget", type=int, required=True, help="env steps per run")
+    p.add_argument("--trials", type=int, default=32)
+    p.add_argument("--seeds", type=int, default=3, help="seeds per trial and task")
+    p.add_argument("--groups", type=int, default=2, help="draws of the static knobs")
+    p.add_argument("--sampler-seed", type=int, default=0)
+    p.add_argument(
+        "--hyperparams",
+        type=Path,
+        default=HYPERPARAMS_DIR / "v2.json",
+        help="hyperparameter file the best trial is merged into",
+    )
+    p.add_argument("--out", type=Path, required=True, help="trials file (JSON)")
+    return p.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    from sixaxis_avoid.benchmark.runner import machine
+    from sixaxis_avoid.benchmark.tasks import load_suite
+
+    a = parse_args(argv if argv is not None else sys.argv[1:])
+    suite = load_suite(a.suite)
+    tasks = suite.tuning_tasks
+    if a.tasks:
+        want = a.tasks.split(",")
+        known = {t.id: t for t in tasks}
+        missing = [t for t in want if t not in known]
+        if missing:
+            raise jl.JaxLearnerError(
+                f"--tasks: {missing[0]!r} is not a tuning task of suite {suite.name!r} "
+                f"({', '.join(known)})"
+            )
+        tasks = [known[t] for t in want]
+    base = [int(s) for s in suite.tuning.get("seeds", [])]
+    seeds = (base + [max(base, default=99) + 1 + i for i in range(a.seeds)])[: a.seeds]
+    candidates = draw(a.algo, a.trials, a.groups, a.sampler_seed)
+    result = tune(
+        a.algo, suite, a.budget, candidates, seeds, tasks,
+        log=lambda m: print(m, file=sys.stderr),
+    )  # fmt: skip
+    argv_s = argv if argv is not None else sys.argv[1:]
+    command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
+    learner = LEARNER[a.algo]
+    out = {
+        "learner": learner,
+        "algo": a.algo,
+        "suite": suite.name,
+        "budget": a.budget,
+        "command": command,
+        "sampler": f"random search, numpy default_rng({a.sampler_seed}), {a.groups} static draws",
+        "objective": "mean final SPL over the tuning tasks and seeds (the reported metric)",
+        "tasks": [t.id for t in tasks],
+        "seeds": seeds,
+        "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "machine": machine(),
+        "load_average": [round(x, 2) for x in os.getloadavg()],
+        **result,
+    }
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(a.out, json.dumps(out, indent=1) + "\n")
+    best = out["trials"][out["best_trial"]]
+    record_best(
+        a.hyperparams,
+        learner,
+        a.budget,
+        best["values"],
+        {
+            "command": command,
+            "trials": str(a.out),
+            "n_trials": a.trials,
+            "seeds": seeds,
+            "tasks": out["tasks"],
+            "objective": out["best_value"],
+            "best_trial": out["best_trial"],
+            "date": out["date"],
+        },
+    )
+    print(
+        json.dumps({k: out[k] for k in ("best_trial", "best_value", "wall_time_s", "cpu_time_s")})
+    )
+    return out
+
+
+if __name__ == "__main__":
+    main()
