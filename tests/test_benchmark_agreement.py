@@ -32,16 +32,21 @@ def test_on_points_takes_the_first_evaluation_at_or_past_each_point():
         agreement.on_points(curve[:2], [7680])
 
 
-def test_sb3_values_carry_every_jax_value_under_sb3_names():
-    j = agreement.jax_args(agreement.parse_args(["--tasks", "paper_simple"]), "paper_simple")
-    v = agreement.sb3_values(j)
-    assert v["batch_size"] == j.num_envs * j.num_steps // j.num_minibatches
-    assert v["clip_range"] == j.clip_eps and v["n_envs"] == j.num_envs
-    assert v["learning_rate"] == j.learning_rate and v["ent_coef"] == j.ent_coef
-    assert v["net_arch"] == [int(h) for h in j.hidden.split(",")]
-    j.activation = "relu"
+def test_sb3_values_are_the_jax_values_less_sb3s_own_activation():
+    pytest.importorskip("jax")
+    from sixaxis_avoid.benchmark import jax_learners
+
+    j = agreement.jax_args(
+        agreement.parse_args(["--tasks", "paper_simple", "--set", "learning_rate=0.001"]),
+        "paper_simple",
+    )
+    assert j.budget == 30_000 and j.evaluations == 12 and j.set == ["learning_rate=0.001"]
+    values = jax_learners.check_values("ppo", jax_learners.parse_sets(j.set))
+    v = agreement.sb3_values("ppo", values)
+    assert v["learning_rate"] == 0.001 and "activation" not in v
+    assert {k: x for k, x in values.items() if k != "activation"} == v
     with pytest.raises(ValueError, match="activation"):
-        agreement.sb3_values(j)
+        agreement.sb3_values("dqn", {**values, "activation": "tanh"})
 
 
 def test_the_section_is_written_from_the_result_files_and_keeps_the_page(tmp_path):
@@ -68,9 +73,10 @@ def test_the_section_is_written_from_the_result_files_and_keeps_the_page(tmp_pat
     agreement.main(["--from-json", str(src), "--markdown", str(page)])
     body = page.read_text()
     assert body.startswith("# Page\n\nkept text\n")
-    row = next(line for line in body.splitlines() if line.startswith("| ppo | t1 |"))
+    row = next(line for line in body.splitlines() if line.startswith("| ppo | t1 | 30,000 |"))
     assert "| 0.50 [0.00, 1.00] | 1.00 [1.00, 1.00] |" in row and row.endswith("| **no** |")
-    assert "--tasks t1 --seeds 2" in body and "--out x.json" in body
+    assert "--tasks t1 --seeds 2 --budget 30000 --evaluations 12" in body and "--out x.json" in body
+    assert "PPO, value loss" in body and "DQN, loss" not in body
     assert "JAX 1,000 env steps/s" in body and "SB3 100" in body
     # Re-writing replaces the section rather than appending a second one.
     agreement.main(["--from-json", str(src), "--markdown", str(page)])

@@ -351,3 +351,36 @@ def test_v1_report_is_the_history_page_and_links_the_current_one(tmp_path, monke
     assert "report --results docs/results/v1 --out docs/BENCHMARKS-v1.md\n" in text
     assert "the current benchmark is [BENCHMARKS.md](BENCHMARKS.md)" in text
     assert not (tmp_path / "docs" / "BENCHMARKS.md").exists()
+
+
+def test_jax_runs_are_labelled_tuned_or_untuned_by_their_budget(tmp_path):
+    """A JAX learner's run at an axis budget records whether values were tuned at that budget
+    (like the SB3 learners), never "n/a"; with by_budget values at B it takes them."""
+    import json as _json
+
+    from sixaxis_avoid.benchmark import load_suite, plan_runs
+
+    suite = load_suite("v2")
+    hp = tmp_path / "hp.json"
+    hp.write_text(
+        _json.dumps(
+            {
+                "learners": {
+                    "jax_ppo": {
+                        "by_budget": {
+                            "30000": {"values": {"learning_rate": 0.01}, "status": "tuned"}
+                        }
+                    }
+                }
+            }
+        )
+    )
+    task = [suite.task("paper_simple")]
+    at30, at100 = (
+        plan_runs(suite, ["jax_ppo"], seeds=[0], tasks=task, hyperparams=hp, budgets=[b])[0]
+        for b in (30_000, 100_000)
+    )
+    assert at30["hyperparams_status"] == "tuned" and at30["hyperparams"]["learning_rate"] == 0.01
+    assert at100["hyperparams_status"] == "untuned"
+    assert at100["hyperparams"]["learning_rate"] != 0.01
+    assert at30["family"] == "jax" and at30["budget"] == 30_000

@@ -1,16 +1,17 @@
 """JAX learners against SB3 with identical hyperparameters: do the two implementations agree?
 
     taskset -c 0 python -m sixaxis_avoid.benchmark.agreement --algo ppo \\
-        --tasks paper_simple,gen-easy-0,gen-medium-0 --seeds 5 --total-timesteps 30000 \\
+        --tasks paper_simple,gen-easy-0,gen-medium-0 --seeds 5 --budget 30000 \\
         --out docs/results/agreement/ppo-30000.json
 
-For each task, rejax's PPO on the JAX twin (``sixaxis_avoid.benchmark.jax_learners``, all
-seeds in one vmapped call) and the benchmark's own SB3 PPO learner
-(``sixaxis_avoid.benchmark.learners.PPO`` on ``SixAxisAvoid-v0``, one seed after the other,
-one torch thread) train with the same values (the ``jax_learners`` flags, mapped to SB3's
-names by :func:`sb3_values`) for the same env steps, and both score their greedy policy on
-the task's evaluation targets at the same env-step points. The score is the benchmark's
-(SPL of the greedy path, 0 if it misses the target).
+For each task, rejax's PPO or DQN on the JAX twin (``sixaxis_avoid.benchmark.jax_learners``,
+all seeds in one vmapped call) and the benchmark's own SB3 learner of the same name
+(``sixaxis_avoid.benchmark.learners.PPO`` / ``DQN`` on ``SixAxisAvoid-v0``, one seed after
+the other, one torch thread) train with the same values (SB3's names on both sides: the
+``jax_learners`` defaults, changed with ``--set``) for the same env steps, and both score
+their greedy policy on the task's evaluation targets at the env steps where the JAX run's
+checkpoints fell. The score is the benchmark's (SPL of the greedy path, 0 if it misses the
+target).
 
 Agreement, per task (docs/BENCHMARKS.md, *JAX and SB3 agree*): the 95% percentile-bootstrap
 intervals over seeds of the two implementations' final scores overlap, and so do those of
@@ -39,18 +40,18 @@ REPS = 2000
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--algo", choices=("ppo",), default="ppo")
+    p.add_argument("--algo", choices=("ppo", "dqn"), default="ppo")
     p.add_argument("--suite", default="v1")
     p.add_argument("--tasks", default="paper_simple,gen-easy-0,gen-medium-0")
     p.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 for both")
-    p.add_argument("--total-timesteps", type=int, default=30_000, help="env steps per seed")
-    p.add_argument("--eval-freq", type=int, default=2_560, help="env steps between evaluations")
+    p.add_argument("--budget", type=int, default=30_000, help="env steps per seed")
+    p.add_argument("--evaluations", type=int, default=12, help="evenly spaced checkpoints")
     p.add_argument(
-        "--jax-flag",
+        "--set",
         action="append",
         default=[],
-        metavar="--NAME=VALUE",
-        help="extra jax_learners flag (repeatable), e.g. --jax-flag=--learning-rate=1e-3",
+        metavar="NAME=JSON",
+        help="a hyperparameter (SB3's name) for both sides, as jax_learners' --set",
     )
     p.add_argument("--skip-sb3", action="store_true", help="JAX side only (a smoke run)")
     p.add_argument("--out", type=Path, default=None, help="JSON file")
@@ -76,40 +77,33 @@ def jax_args(a: argparse.Namespace, task: str) -> argparse.Namespace:
     return jax_learners.parse_args(
         [
             "--algo", a.algo, "--suite", a.suite, "--task", task, "--seeds", str(a.seeds),
-            "--total-timesteps", str(a.total_timesteps), "--eval-freq", str(a.eval_freq),
-            *a.jax_flag,
+            "--budget", str(a.budget), "--evaluations", str(a.evaluations),
+            *[f"--set={x}" for x in a.set],
         ]
     )  # fmt: skip
 
 
-def sb3_values(j: argparse.Namespace) -> dict[str, Any]:
-    """The benchmark's SB3 PPO hyperparameters (its names) with the JAX run's values."""
-    if j.activation != "tanh":  # SB3's MlpPolicy default, which the learner does not change
-        raise ValueError(f"--activation: {j.activation!r}; the SB3 learner uses tanh")
-    return {
-        "reward_scale": j.reward_scale,
-        "assist": bool(j.assist),
-        "max_episode_steps": j.max_episode_steps,
-        "n_envs": j.num_envs,
-        "n_steps": j.num_steps,
-        "batch_size": j.num_envs * j.num_steps // j.num_minibatches,
-        "n_epochs": j.num_epochs,
-        "learning_rate": j.learning_rate,
-        "gamma": j.gamma,
-        "gae_lambda": j.gae_lambda,
-        "clip_range": j.clip_eps,
-        "ent_coef": j.ent_coef,
-        "vf_coef": j.vf_coef,
-        "max_grad_norm": j.max_grad_norm,
-        "net_arch": [int(h) for h in j.hidden.split(",")],
-    }
+#: The activation of SB3's policies, which the benchmark's SB3 learners do not change.
+SB3_ACTIVATION = {"ppo": "tanh", "dqn": "relu"}
 
 
-def sb3_curve(task: Any, seed: int, values: dict[str, Any], budget: int, points: list[int]):
+def sb3_values(algo: str, values: dict[str, Any]) -> dict[str, Any]:
+    """The SB3 learner's hyperparameters: the JAX run's values (already SB3's names) without
+    the activation, which must be SB3's own."""
+    out = dict(values)
+    act = out.pop("activation", SB3_ACTIVATION[algo])
+    if act != SB3_ACTIVATION[algo]:
+        raise ValueError(f"activation: {act!r}; SB3's {algo} learner uses {SB3_ACTIVATION[algo]}")
+    return out
+
+
+def sb3_curve(
+    algo: str, task: Any, seed: int, values: dict[str, Any], budget: int, points: list[int]
+):
     """One SB3 run's scores at ``points`` (env steps) and its wall time."""
     from sixaxis_avoid.benchmark.learners import RunContext, resolve
 
-    learner = resolve("ppo")(values)
+    learner = resolve(algo)(values)
     ctx = RunContext(task, seed, budget, learner.hyperparams, points, learner)
     t0 = time.perf_counter()
     learner.learn(ctx)
@@ -176,19 +170,25 @@ def summarise(jax_s: np.ndarray, sb3_s: np.ndarray, seed: int = 0) -> dict[str, 
     return out
 
 
-#: Where rejax's PPO (0.1.3) and SB3's (2.x) differ with the same values, read in their
-#: sources; the section lists them so that a disagreement can be traced.
-PPO_DIFFERENCES = (
-    "value loss: rejax clips the value prediction to ±clip_eps around the rollout's value "
-    "(CleanRL's form); SB3 does not clip it (`clip_range_vf=None`)",
-    "optimiser: rejax has one Adam per network (actor, critic), each with its own gradient-norm "
-    "clip; SB3 one Adam over the summed loss, clipped once; Adam's eps is 1e-8 in optax, "
-    "1e-5 in SB3's PPO",
-    "initialisation: flax's default (LeCun normal) in rejax; SB3's orthogonal (gains √2, 0.01 "
-    "for the policy head, 1 for the value head)",
-    "truncation: rejax treats a truncated episode as terminal (no bootstrap); SB3 bootstraps "
-    "from the value of the last observation",
-)
+#: Where rejax's learners (0.1.3, as ``jax_learners.rejax_classes`` adjusts them: gradient
+#: clipping by global norm, PPO's Adam eps 1e-5, DQN's hard target copy and net size) still
+#: differ from SB3's (2.x) with the same values, read in their sources; the section lists them
+#: so that a disagreement can be traced.
+DIFFERENCES = {
+    "ppo": (
+        "value loss: rejax clips the value prediction to ±clip_range around the rollout's "
+        "value (CleanRL's form); SB3 does not clip it (`clip_range_vf=None`)",
+        "optimiser: rejax has one Adam per network (actor, critic), each clipped to "
+        "max_grad_norm on its own; SB3 one Adam over the summed loss, clipped once",
+    ),
+    "dqn": ("loss: squared error in rejax; Huber (smooth L1) in SB3",),
+    "both": (
+        "initialisation: flax's default (LeCun normal) in rejax; SB3's orthogonal",
+        "truncation: rejax treats a truncated episode as terminal (no bootstrap); SB3 "
+        "bootstraps from the value of the last observation (PPO) or keeps the transition "
+        "non-terminal (DQN)",
+    ),
+}
 
 
 def markdown(results: list[dict[str, Any]]) -> str:
@@ -215,9 +215,9 @@ def markdown(results: list[dict[str, Any]]) -> str:
             "python -m sixaxis_avoid.benchmark.agreement "
             + " ".join(
                 f"--{k.replace('_', '-')} {f[k]}"
-                for k in ("algo", "suite", "tasks", "seeds", "total_timesteps", "eval_freq")
+                for k in ("algo", "suite", "tasks", "seeds", "budget", "evaluations")
             )
-            + "".join(f" --jax-flag={x}" for x in f["jax_flag"])
+            + "".join(f" --set={x}" for x in f["set"])
             + (f" --out {f['out']}" if f.get("out") else "")
         )
         for tid, e in r["tasks"].items():
@@ -229,7 +229,7 @@ def markdown(results: list[dict[str, Any]]) -> str:
                 return f"{x['mean']:.2f} [{x['ci'][0]:.2f}, {x['ci'][1]:.2f}]"
 
             lines.append(
-                f"| {f['algo']} | {tid} | {int(f['total_timesteps']):,} "
+                f"| {f['algo']} | {tid} | {int(f['budget']):,} "
                 f"| {len(e['jax']['spl'])} | {cell(g['final']['jax'])} "
                 f"| {cell(g['final']['sb3'])} | {cell(g['auc']['jax'])} "
                 f"| {cell(g['auc']['sb3'])} | {g['final']['permutation_p']:.2f} "
@@ -254,8 +254,12 @@ def markdown(results: list[dict[str, Any]]) -> str:
                     else "."
                 )
             )
-    lines += ["", "Where the two PPOs differ with the same values (read in their sources):", ""]
-    lines += [f"- {d}." for d in PPO_DIFFERENCES]
+    algos = sorted({r["flags"]["algo"] for r in results})
+    lines += ["", "Where rejax and SB3 differ with the same values (read in their sources):", ""]
+    for algo in [*algos, "both"]:
+        lines += [
+            f"- {'' if algo == 'both' else algo.upper() + ', '}{d}." for d in DIFFERENCES[algo]
+        ]
     lines += ["", "```bash", *commands, "```"]
     return "\n".join(lines)
 
@@ -293,10 +297,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         task = suite.task(tid)
         j = jax_args(a, tid)
         jr = jax_learners.run(j)
-        # Evaluations after training began (rejax's first is at env step 0).
-        keep = [i for i, e in enumerate(jr["eval_env_steps"]) if e > 0]
-        points = [int(jr["eval_env_steps"][i]) for i in keep]
-        jax_s = np.asarray(jr["spl"], dtype=np.float64)[:, keep]
+        points = [int(e) for e in jr["eval_env_steps"]]
+        jax_s = np.asarray(jr["spl"], dtype=np.float64)
         entry: dict[str, Any] = {
             "eval_env_steps": points,
             "jax": {
@@ -304,14 +306,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 "train_wall_s": jr["train_wall_s"],
                 "compile_s": jr["compile_s"],
                 "env_steps_per_s": jr["env_steps_per_s"],
+                "env_steps_per_cpu_s": jr["env_steps_per_cpu_s"],
+                "values": jr["values"],
                 "rejax_config": jr["rejax_config"],
             },
         }
         if not a.skip_sb3:
-            values = sb3_values(j)
+            values = sb3_values(a.algo, jr["values"])
             rows, walls = [], []
             for seed in jr["seeds"]:
-                curve, wall = sb3_curve(task, seed, values, a.total_timesteps, points)
+                curve, wall = sb3_curve(a.algo, task, seed, values, a.budget, points)
                 rows.append(on_points(curve, points))
                 walls.append(wall)
             sb3_s = np.asarray(rows, dtype=np.float64)
@@ -319,7 +323,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 "spl": sb3_s.tolist(),
                 "values": values,
                 "train_wall_s": float(sum(walls)),
-                "env_steps_per_s": len(walls) * a.total_timesteps / sum(walls),
+                "env_steps_per_s": len(walls) * a.budget / sum(walls),
             }
             entry["agreement"] = summarise(jax_s, sb3_s)
         out["tasks"][tid] = entry

@@ -32,6 +32,10 @@ from sixaxis_avoid.benchmark.tasks import Suite, Task
 
 SCHEMA = 1
 
+#: The learner families whose hyperparameters are tuned (the others: the paper's values, or
+#: no learning): their runs record "tuned" or "untuned".
+TUNED = ("deep", "jax")
+
 #: PyTorch CPU settings every run gets, so that a deep learner's floating-point results do
 #: not depend on the machine's instruction set: MKL's conditional numerical reproducibility
 #: (MKL_CBWR=COMPATIBLE) and ATen's AVX2 kernels (not AVX-512 where a CPU has it). Without
@@ -135,7 +139,7 @@ def _plan_at(
         cls = resolve(learner)
         family = family_of(cls)
         values = hpmod.values_for(hp_file, learner, dict(getattr(cls, "defaults", {})))
-        status = "n/a" if family != "deep" else hpmod.status_for(hp_file, learner)
+        status = "n/a" if family not in TUNED else hpmod.status_for(hp_file, learner)
         if axis_budget is not None:
             # A run at budget B takes the values tuned at B (the file's ``by_budget``), never
             # those of another budget: without them it runs with defaults, "untuned".
@@ -144,7 +148,7 @@ def _plan_at(
             values = {**dict(getattr(cls, "defaults", {})), **((at or {}).get("values", {}))}
             if at is not None:
                 status = str(at.get("status", "tuned"))
-            elif family == "deep":
+            elif family in TUNED:
                 status = "untuned"
         values.update(suite.raw.get("overrides", {}).get(learner, {}))
         values.update((overrides or {}).get(learner, {}))
