@@ -116,7 +116,7 @@ mod tests;
 
 pub use crate::scenario::{Learning, AUTO_EPISODE_CAP};
 pub use initial::{distance_bound_table, distance_bound_values};
-pub use learner::{greedy_path, q_update, train, TrainResult};
+pub use learner::{greedy_path, q_update, train, train_with_checkpoints, Checkpoint, TrainResult};
 pub use report::TrainReport;
 pub use table::QTable;
 
