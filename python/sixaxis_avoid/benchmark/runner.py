@@ -65,14 +65,42 @@ def numerics() -> dict[str, Any]:
 # Specs
 
 
-def budget_of(suite: Suite, family: str, task: Task, scale: float = 1.0) -> dict[str, Any]:
-    """A run's budget: env steps (and the native learner's episode cap)."""
+def budget_axis(suite: Suite) -> list[int] | None:
+    """The suite's budgets in env steps (``budgets.axis``, suite v2), or None (v1)."""
+    axis = suite.budgets.get("axis")
+    return None if axis is None else [int(x) for x in axis]
+
+
+def budget_of(
+    suite: Suite, family: str, task: Task, scale: float = 1.0, budget: int | None = None
+) -> dict[str, Any]:
+    """A run's budget: env steps (and the tabular learner's options that fit it).
+
+    With a budget axis (suite v2), every learner gets ``budget`` env steps (default: the
+    axis's largest), and a tabular ("native") run stops there with its epsilon falling over
+    env steps (``max_env_steps``, ``epsilon_schedule="env_steps"``); the paper's learner
+    (family "paper", the reproduction row) keeps its episode count. Without one (v1), the
+    deep budget and the native episode cap."""
     b = {**suite.budgets, **task.spec.get("budgets", {})}
+    axis = b.get("axis")
+    if axis is not None:
+        steps = max(1, round(int(budget if budget is not None else max(axis)) * scale))
+        if family == "native":
+            return {
+                "env_steps": steps,
+                "native": {"max_env_steps": steps, "epsilon_schedule": "env_steps"},
+            }
+        if family == "paper":
+            return {
+                "env_steps": steps,
+                "native": {"episodes": int(b.get("native_episodes", 10_000))},
+            }
+        return {"env_steps": 0} if family == "reference" else {"env_steps": steps}
     deep = int(b["deep_goal"] if task.is_goal and "deep_goal" in b else b["deep"])
     deep = max(1, round(deep * scale))
-    if family == "native":
+    if family in ("native", "paper"):
         native = {"episodes": int(b.get("native_episodes", 10_000))}
-        if b.get("native_steps") is not None:
+        if family == "native" and b.get("native_steps") is not None:
             native["max_env_steps"] = int(b["native_steps"])
         return {"env_steps": deep, "native": native}
     if family == "reference":
@@ -89,10 +117,13 @@ def plan_runs(
     budget_scale: float = 1.0,
     overrides: dict[str, dict[str, Any]] | None = None,
     tag: str | None = None,
+    budgets: list[int] | None = None,
 ) -> list[dict[str, Any]]:
-    """The specs of a study's runs: learners x tasks x seeds (``tag`` prefixes their result
-    files, e.g. a tuning trial's number)."""
+    """The specs of a study's runs: learners x tasks x seeds, and x budgets on a suite with a
+    budget axis (``budgets``: a subset; default the axis; budget-free learners run once at
+    the largest). ``tag`` prefixes their result files, e.g. a tuning trial's number."""
     hp_file = hpmod.load(hyperparams)
+    axis = budget_axis(suite)
     specs = []
     for learner in learners:
         cls = resolve(learner)
@@ -100,10 +131,17 @@ def plan_runs(
         values = hpmod.values_for(hp_file, learner, dict(getattr(cls, "defaults", {})))
         values.update(suite.raw.get("overrides", {}).get(learner, {}))
         values.update((overrides or {}).get(learner, {}))
-        for task in tasks if tasks is not None else suite.tasks:
-            budget = budget_of(suite, family, task, budget_scale)
+        at: list[int | None] = [None]
+        if axis is not None and family not in ("paper", "reference"):
+            at = list(budgets or axis)
+        for task, b_at in [
+            (t, b) for t in (tasks if tasks is not None else suite.tasks) for b in at
+        ]:
+            budget = budget_of(suite, family, task, budget_scale, b_at)
             hp = {**values, **budget.get("native", {})}
-            cap = suite.algorithm2.get(family, suite.algorithm2["deep"])
+            cap = suite.algorithm2.get(
+                "native" if family == "paper" else family, suite.algorithm2["deep"]
+            )
             for seed in seeds if seeds is not None else suite.seeds:
                 specs.append(
                     {
@@ -123,6 +161,7 @@ def plan_runs(
                         if family != "deep"
                         else hpmod.status_for(hp_file, learner),
                         "max_replans": int(cap),
+                        **({"budget_axis": True} if axis is not None else {}),
                         **({"tag": tag} if tag else {}),
                     }
                 )
@@ -135,6 +174,8 @@ def spec_hash(spec: dict[str, Any]) -> str:
 
 def run_key(spec: dict[str, Any]) -> str:
     raw = f"{spec['task']['id']}__{spec['learner']}__s{spec['seed']}"
+    if spec.get("budget_axis"):  # one run per budget of the axis
+        raw = f"{raw}__b{spec['budget']}"
     if spec.get("tag"):
         raw = f"{spec['tag']}__{raw}"
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", raw)
