@@ -165,7 +165,6 @@ class Arm:
         rpy_deg: Sequence[float] | None = None,
     ) -> npt.NDArray[np.float64]: ...
 
-@final
 class _TrainCheckpoint(TypedDict):
     env_steps: int
     episode: int
@@ -173,6 +172,7 @@ class _TrainCheckpoint(TypedDict):
     wall_time_s: float
     cpu_time_s: float | None
 
+@final
 class TrainResult:
     @property
     def path(self) -> list[_Cell] | None: ...
