@@ -5,7 +5,6 @@ checkpoints, and v1's specs unchanged."""
 from __future__ import annotations
 
 import numpy as np
-
 import sixaxis_avoid as sa
 from sixaxis_avoid.benchmark import runner
 from sixaxis_avoid.benchmark.learners import split_budget
