@@ -388,7 +388,16 @@ def test_cli_list_and_errors(capsys):
     assert cli.main(["list", "--suite", "quick", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)
     assert [t["id"] for t in listed["tasks"]] == [t.id for t in load_suite("quick").tasks]
-    assert set(listed["learners"]) == {"q_assist", "q_plain", "bfs", "dqn", "qrdqn", "ppo", "a2c"}
+    assert set(listed["learners"]) == {
+        "q_assist",
+        "q_plain",
+        "q_paper",
+        "bfs",
+        "dqn",
+        "qrdqn",
+        "ppo",
+        "a2c",
+    }
     assert cli.main(["run", "--suite", "quick", "--learners", "sarsa", "--no-ray"]) == 2
     assert "sarsa" in capsys.readouterr().err
     with pytest.raises(SystemExit):

@@ -2,7 +2,7 @@
 
 from collections.abc import Callable, Iterable, Sequence
 from os import PathLike
-from typing import Any, Literal, Protocol, final
+from typing import Any, Literal, Protocol, TypedDict, final
 
 import numpy as np
 import numpy.typing as npt
@@ -166,6 +166,13 @@ class Arm:
         rpy_deg: Sequence[float] | None = None,
     ) -> npt.NDArray[np.float64]: ...
 
+class _TrainCheckpoint(TypedDict):
+    env_steps: int
+    episode: int
+    path: list[list[int]] | None
+    wall_time_s: float
+    cpu_time_s: float | None
+
 @final
 class TrainResult:
     @property
@@ -182,6 +189,8 @@ class TrainResult:
     def converged_episode(self) -> int | None: ...
     @property
     def length_converged_episode(self) -> int | None: ...
+    @property
+    def checkpoints(self) -> list[_TrainCheckpoint]: ...
     @property
     def total_steps(self) -> int: ...
     @property
@@ -208,6 +217,7 @@ def train(
     extra_obstacles: Iterable[_CellLike] | None = None,
     initial_q: Literal["zero", "distance"] | _QArray | None = None,
     progress: Callable[[int], object] | None = None,
+    checkpoints: Sequence[int] | None = None,
     # options:train >>>
     assist: bool | None = None,
     episodes: int | Literal["auto"] | None = None,
@@ -220,6 +230,9 @@ def train(
     gamma: float | None = None,
     epsilon_start: float | None = None,
     epsilon_decay_episodes: int | None = None,
+    max_env_steps: int | None = None,
+    epsilon_schedule: Literal["episodes", "env_steps"] | None = None,
+    epsilon_decay_fraction: float | None = None,
     episode_cap: int | None = None,
     # <<< options:train
 ) -> TrainResult: ...
@@ -524,6 +537,9 @@ def plan(
     gamma: float | None = None,
     epsilon_start: float | None = None,
     epsilon_decay_episodes: int | None = None,
+    max_env_steps: int | None = None,
+    epsilon_schedule: Literal["episodes", "env_steps"] | None = None,
+    epsilon_decay_fraction: float | None = None,
     episode_cap: int | None = None,
     max_replans: int | None = None,
     # <<< options:plan

@@ -1,10 +1,11 @@
-"""``python -m sixaxis_avoid.benchmark {run,tune,report,list}``: the learner benchmark.
+"""``python -m sixaxis_avoid.benchmark {run,tune,tune-native,report,list}``: the learner benchmark.
 
 python -m sixaxis_avoid.benchmark list                          # suites, learners, tasks
 python -m sixaxis_avoid.benchmark run --suite quick             # CI-sized, a minute or two
 python -m sixaxis_avoid.benchmark run --suite v1                # the reported study
 python -m sixaxis_avoid.benchmark run --suite v1 --address auto # on a Ray cluster
 python -m sixaxis_avoid.benchmark tune --suite v1 --trials 30   # Optuna, tuning tasks only
+python -m sixaxis_avoid.benchmark tune-native --budget 100000 --trials 32 --seeds 3  # tabular
 python -m sixaxis_avoid.benchmark run --suite v1 --learners ppo --budget-scale 10 \
     --set ppo.lr_schedule=linear --out-dir results/bench/v1-x10-lin  # longer, one change
 python -m sixaxis_avoid.benchmark run --suite v2 --budgets 30000,100000   # part of the axis
@@ -104,6 +105,28 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     t.add_argument("--out", type=Path, help="hyperparameter file (default: the suite's)")
     t.add_argument("--log-dir", type=Path, help="trial results (default results/tune/SUITE)")
     add_ray_args(t)
+
+    tn = sub.add_parser(
+        "tune-native", help="random search for the tabular learners at one env-step budget"
+    )
+    tn.add_argument("--suite", default="v1", help="its tuning tasks are searched on")
+    tn.add_argument("--learners", default="q_assist", help="comma list of q_assist, q_plain")
+    tn.add_argument("--budget", type=int, required=True, help="env steps per run")
+    tn.add_argument("--trials", type=int, default=32)
+    tn.add_argument(
+        "--seeds",
+        help="a count N (N seeds from the suite's first tuning seed; default 3) or a list",
+    )
+    tn.add_argument("--sampler-seed", type=int, default=0)
+    tn.add_argument(
+        "--out",
+        type=Path,
+        help="trials export (default docs/results/v2-tuning/LEARNER-BUDGET.json)",
+    )
+    tn.add_argument(
+        "--record", type=Path, help="hyperparameter file whose by_budget entry gets the best values"
+    )
+    tn.add_argument("--no-progress", action="store_true")
 
     rep = sub.add_parser("report", help="docs/BENCHMARKS.md and figures from result files")
     rep.add_argument("--results", type=Path, default=Path("results/bench/v1"))
@@ -285,6 +308,10 @@ def main(argv: list[str] | None = None) -> int:
             from sixaxis_avoid.benchmark.tune import cmd_tune
 
             return cmd_tune(args, argv)
+        if args.cmd == "tune-native":
+            from sixaxis_avoid.benchmark.tune import cmd_tune_native
+
+            return cmd_tune_native(args, argv)
         if args.cmd == "report":
             from sixaxis_avoid.benchmark.report import write_longer_report, write_report
             from sixaxis_avoid.benchmark.report_v2 import write_report_v2

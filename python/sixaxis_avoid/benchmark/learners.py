@@ -193,7 +193,8 @@ class CountingEnv(gym.Wrapper):
 class Learner(abc.ABC):
     """One learner; a fresh instance per run, built with the run's hyperparameters."""
 
-    #: "native" (tabular, the paper's), "deep" (neural) or "reference" (BFS): which budget
+    #: "native" (tabular), "paper" (the paper's 10,000-episode learner), "deep" (neural) or
+    #: "reference" (BFS): which budget
     #: and Algorithm 2 re-plan cap of the suite apply.
     family: ClassVar[str] = "deep"
     #: Hyperparameters used when the hyperparameter file has none for this learner.
@@ -259,13 +260,42 @@ def same_world(a: Any, b: Any) -> bool:
 # Native tabular Q-learning (the paper's) and the BFS optimum
 
 
+#: Hyperparameters of the tabular learner passed to ``sixaxis_avoid.train`` on a budget in
+#: env steps (the tuned ones and the episode step cap).
+NATIVE_KEYS = (
+    "alpha",
+    "gamma",
+    "epsilon_start",
+    "epsilon_decay_fraction",
+    "max_steps_per_episode",
+)
+
+
+def split_budget(budget: int, parts: int) -> list[int]:
+    """``budget`` env steps in ``parts`` near-equal shares that sum to it (the first ones get
+    the remainder)."""
+    q, r = divmod(int(budget), int(parts))
+    return [q + (i < r) for i in range(parts)]
+
+
 class NativeQ(Learner):
-    """The core's tabular Q-learner (``sixaxis_avoid.train``), the paper's eqs. 5-8."""
+    """The core's tabular Q-learner (``sixaxis_avoid.train``), the paper's eqs. 5-8.
+
+    On a budget in env steps (``epsilon_schedule="env_steps"`` in its hyperparameters, set by
+    ``runner.budget_of`` for a suite with a budget axis) a run stops at ``max_env_steps`` = B
+    with epsilon falling over ``epsilon_decay_fraction`` x B env steps; a goal task gives
+    each evaluation target its own run of B / n_targets env steps, one after the other, so
+    the total is B. The curve's greedy paths come from the core's checkpoints during that one
+    run. Otherwise (suite v1) the paper's episode count, with the curve from episode
+    prefixes."""
 
     family = "native"
     assist: ClassVar[bool] = True
 
     def learn(self, ctx: RunContext) -> None:
+        if self.hyperparams.get("epsilon_schedule") == "env_steps":
+            self._learn_env_steps(ctx)
+            return
         cap = int(self.hyperparams.get("episodes") or ctx.world.learning["episodes"])
         step_cap = self.hyperparams.get("max_env_steps")
         targets = ctx.targets()
@@ -315,6 +345,81 @@ class NativeQ(Learner):
         ctx.env_steps = total
         ctx.episodes = sum(r.episodes for r in runs)
 
+    def _train_options(self) -> dict[str, Any]:
+        hp = self.hyperparams
+        return {k: hp[k] for k in NATIVE_KEYS if hp.get(k) is not None}
+
+    def _learn_env_steps(self, ctx: RunContext) -> None:
+        import sixaxis_avoid as sa
+
+        budget = int(self.hyperparams.get("max_env_steps") or ctx.budget)
+        targets = ctx.targets()
+        shares = split_budget(budget, len(targets))
+        if min(shares) < 1:
+            raise LearnerError(f"budget {budget}: fewer env steps than targets ({len(targets)})")
+        offsets = np.concatenate([[0], np.cumsum(shares)]).astype(np.int64)
+        grid = sorted({int(c) for c in ctx.checkpoints if 0 < c <= budget} | {budget})
+        opts = self._train_options()
+        self._paths = {}
+        self._per_target = {"max_env_steps": shares[0], "episodes": shares[0], **opts}
+        # Per target run: its result, CPU seconds, and its checkpoints by global env step.
+        done: list[tuple[Any, float]] = []
+        points: list[tuple[int, int, dict[str, Any]]] = []  # (global step, run, checkpoint)
+        for i, (t, share) in enumerate(zip(targets, shares)):
+            local = [c - int(offsets[i]) for c in grid if offsets[i] < c <= offsets[i + 1]]
+            c0 = time.process_time()
+            r = sa.train(
+                self._world(ctx, t),
+                seed=ctx.seed,
+                assist=self.assist,
+                episodes=min(share, 2**32 - 1),
+                max_env_steps=share,
+                epsilon_schedule="env_steps",
+                checkpoints=local,
+                **opts,
+            )
+            cpu = time.process_time() - c0
+            if r.total_steps != share:  # the episode cap is never the binding one
+                raise RuntimeError(f"target {t}: {r.total_steps} env steps, budget {share}")
+            self._paths[t] = r.path
+            done.append((r, cpu))
+            points += [(int(offsets[i]) + cp["env_steps"], i, cp) for cp in r.checkpoints]
+        before_wall = np.concatenate([[0.0], np.cumsum([r.wall_time_s for r, _ in done])])
+        before_cpu = np.concatenate([[0.0], np.cumsum([c for _, c in done])])
+        for step, i, cp in points:
+            paths: list[Any] = [done[j][0].path for j in range(i)] + [cp["path"]]
+            paths += [None] * (len(targets) - len(paths))
+            cpu = cp["cpu_time_s"] if cp["cpu_time_s"] is not None else cp["wall_time_s"]
+            ctx.checkpoint(
+                step,
+                paths,
+                wall_time_s=float(before_wall[i] + cp["wall_time_s"]),
+                cpu_time_s=float(before_cpu[i] + cpu),
+            )
+        # First success: the end of the first episode that reached its target. Its time is
+        # interpolated (linear in env steps) between the recorded points around it.
+        for i, (r, _) in enumerate(done):
+            reached = np.asarray(r.reached_per_episode, dtype=bool)
+            if reached.any():
+                e = int(np.argmax(reached))
+                step = int(offsets[i] + np.sum(np.asarray(r.steps_per_episode)[: e + 1]))
+                xs = [0] + [p["env_steps"] for p in ctx.points]
+                ctx.first_success = {
+                    "env_steps": step,
+                    "episode": sum(len(x.steps_per_episode) for x, _ in done[:i]) + e,
+                    "wall_time_s": float(
+                        np.interp(step, xs, [0.0] + [p["wall_time_s"] for p in ctx.points])
+                    ),
+                    "cpu_time_s": float(
+                        np.interp(step, xs, [0.0] + [p["cpu_time_s"] for p in ctx.points])
+                    ),
+                }
+                break
+        self.converged_episode = done[0][0].converged_episode
+        self.episodes_run = len(done[0][0].steps_per_episode)
+        ctx.env_steps = budget
+        ctx.episodes = sum(len(r.steps_per_episode) for r, _ in done)
+
     @staticmethod
     def _world(ctx: RunContext, target: Cell) -> Any:
         return ctx.task.world(target) if ctx.world is ctx.task.scenario else ctx.world
@@ -326,6 +431,9 @@ class NativeQ(Learner):
         return "qlearning"
 
     def algorithm2_kwargs(self) -> dict[str, Any]:
+        if self.hyperparams.get("epsilon_schedule") == "env_steps":
+            # Every re-plan round learns on the run's budget (per target) and schedule.
+            return {**self._per_target, "epsilon_schedule": "env_steps", "assist": self.assist}
         return {"episodes": self.episodes_run, "assist": self.assist}
 
 
@@ -375,6 +483,15 @@ class QAssisted(NativeQ):
 class QPlain(NativeQ):
     title = "tabular Q-learning, plain (eq. 5 alone)"
     assist = False
+
+
+class QPaper(NativeQ):
+    """The paper's learner as published: assisted, 10,000 episodes, epsilon over episodes,
+    whatever the suite's env-step budget (the reproduction row, outside the ranking)."""
+
+    title = "tabular Q-learning, assisted, the paper's 10,000 episodes (reproduction row)"
+    family = "paper"
+    assist = True
 
 
 class BFS(Learner):
@@ -567,6 +684,7 @@ class A2C(SB3Learner):
 BUILTIN: dict[str, type[Learner]] = {
     "q_assist": QAssisted,
     "q_plain": QPlain,
+    "q_paper": QPaper,
     "bfs": BFS,
     "dqn": DQN,
     "qrdqn": QRDQN,

@@ -70,19 +70,35 @@ def numerics() -> dict[str, Any]:
 
 
 def budget_of(
-    suite: Suite, family: str, task: Task, scale: float = 1.0, env_steps: int | None = None
+    suite: Suite, family: str, task: Task, scale: float = 1.0, budget: int | None = None
 ) -> dict[str, Any]:
-    """A run's budget: env steps (and the native learner's episode cap); ``env_steps``: a
-    budget of the suite's axis (``budgets.axis``, suite v2), the same for every family."""
+    """A run's budget: env steps (and the tabular learner's options that fit it).
+
+    With a budget axis (suite v2), every learner gets ``budget`` env steps (default: the
+    axis's largest), and a tabular ("native") run stops there with its epsilon falling over
+    env steps (``max_env_steps``, ``epsilon_schedule="env_steps"``); the paper's learner
+    (family "paper", the reproduction row) keeps its episode count. Without one (v1), the
+    deep budget and the native episode cap."""
     b = {**suite.budgets, **task.spec.get("budgets", {})}
-    if env_steps is not None:
-        deep = int(env_steps)
-    else:
-        deep = int(b["deep_goal"] if task.is_goal and "deep_goal" in b else b["deep"])
+    axis = b.get("axis")
+    if axis is not None:
+        steps = max(1, round(int(budget if budget is not None else max(axis)) * scale))
+        if family == "native":
+            return {
+                "env_steps": steps,
+                "native": {"max_env_steps": steps, "epsilon_schedule": "env_steps"},
+            }
+        if family == "paper":
+            return {
+                "env_steps": steps,
+                "native": {"episodes": int(b.get("native_episodes", 10_000))},
+            }
+        return {"env_steps": 0} if family == "reference" else {"env_steps": steps}
+    deep = int(b["deep_goal"] if task.is_goal and "deep_goal" in b else b["deep"])
     deep = max(1, round(deep * scale))
-    if family == "native":
+    if family in ("native", "paper"):
         native = {"episodes": int(b.get("native_episodes", 10_000))}
-        if b.get("native_steps") is not None:
+        if family == "native" and b.get("native_steps") is not None:
             native["max_env_steps"] = int(b["native_steps"])
         return {"env_steps": deep, "native": native}
     if family == "reference":
@@ -104,7 +120,8 @@ def plan_runs(
     """The specs of a study's runs: learners x tasks x seeds (``tag`` prefixes their result
     files, e.g. a tuning trial's number); on a suite with a budget axis (``budgets.axis``),
     x budgets (``budgets``: a subset of the axis, default all of it), each run's
-    ``budget`` one of them."""
+    ``budget`` one of them, except the paper's learner (family "paper": its episode count
+    does not depend on the budget), planned once, at the largest budget chosen."""
     axis = suite.budgets.get("axis")
     if budgets is not None and axis is None:
         raise ValueError(f"budgets {budgets}: suite {suite.name!r} has no budget axis")
@@ -115,10 +132,12 @@ def plan_runs(
             if b not in axis:
                 raise ValueError(f"budgets: {b} is not on suite {suite.name!r}'s axis {axis}")
     specs = []
+    last = max((b for b in chosen if b is not None), default=None)
     for axis_budget in chosen:
         specs += _plan_at(
-            suite, learners, seeds, tasks, hyperparams, budget_scale, overrides, tag, axis_budget
-        )
+            suite, learners, seeds, tasks, hyperparams, budget_scale, overrides, tag, axis_budget,
+            last,
+        )  # fmt: skip
     return specs
 
 
@@ -132,12 +151,15 @@ def _plan_at(
     overrides: dict[str, dict[str, Any]] | None,
     tag: str | None,
     axis_budget: int | None,
+    last_budget: int | None = None,
 ) -> list[dict[str, Any]]:
     hp_file = hpmod.load(hyperparams)
     specs = []
     for learner in learners:
         cls = resolve(learner)
         family = family_of(cls)
+        if family == "paper" and axis_budget is not None and axis_budget != last_budget:
+            continue  # the paper's 10,000 episodes do not depend on the budget: run once
         values = hpmod.values_for(hp_file, learner, dict(getattr(cls, "defaults", {})))
         status = "n/a" if family not in TUNED else hpmod.status_for(hp_file, learner)
         if axis_budget is not None:
@@ -148,14 +170,16 @@ def _plan_at(
             values = {**dict(getattr(cls, "defaults", {})), **((at or {}).get("values", {}))}
             if at is not None:
                 status = str(at.get("status", "tuned"))
-            elif family in TUNED:
+            elif family in (*TUNED, "native"):  # on a budget axis the tabular ones are tuned too
                 status = "untuned"
         values.update(suite.raw.get("overrides", {}).get(learner, {}))
         values.update((overrides or {}).get(learner, {}))
         for task in tasks if tasks is not None else suite.tasks:
-            budget = budget_of(suite, family, task, budget_scale, env_steps=axis_budget)
+            budget = budget_of(suite, family, task, budget_scale, axis_budget)
             hp = {**values, **budget.get("native", {})}
-            cap = suite.algorithm2.get(family, suite.algorithm2["deep"])
+            cap = suite.algorithm2.get(
+                "native" if family == "paper" else family, suite.algorithm2["deep"]
+            )
             for seed in seeds if seeds is not None else suite.seeds:
                 specs.append(
                     {

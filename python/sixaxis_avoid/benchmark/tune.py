@@ -124,3 +124,182 @@ def cmd_tune(args: argparse.Namespace, argv: list[str]) -> int:
 
             ray.shutdown()
     return 0
+
+
+# ------------------------------------------------------------------------------------------
+# ``benchmark tune-native``: the tabular learners at one budget in env steps
+
+#: The tabular learners' search space: name -> (low, high, log scale). The paper's values
+#: (alpha 0.05, gamma 0.9, epsilon_start 0.1, epsilon_decay_fraction 0.99) lie inside.
+NATIVE_SPACE: dict[str, tuple[float, float, bool]] = {
+    "alpha": (0.01, 1.0, True),
+    "gamma": (0.5, 0.999, False),
+    "epsilon_start": (0.01, 1.0, True),
+    "epsilon_decay_fraction": (0.1, 1.0, False),
+}
+NATIVE_TUNABLE = ("q_assist", "q_plain")
+
+
+def native_score(
+    learner: str, task: Any, seed: int, budget: int, hp: dict[str, Any]
+) -> dict[str, Any]:
+    """One tuning run of a tabular learner: ``budget`` env steps on ``task`` (the benchmark's
+    own code path, :class:`~sixaxis_avoid.benchmark.learners.NativeQ` on a budget in env
+    steps); its final score (mean SPL over the task's evaluation targets) and success."""
+    from sixaxis_avoid.benchmark.learners import RunContext, resolve
+
+    cls = resolve(learner)
+    lr = cls({**hp, "max_env_steps": int(budget), "epsilon_schedule": "env_steps"})
+    ctx = RunContext(task, seed, budget, lr.hyperparams, [budget], lr)
+    lr.learn(ctx)
+    ctx.finish()
+    final = ctx.points[-1]
+    return {"score": final["score"], "success": final["success"], "env_steps": ctx.env_steps}
+
+
+def tune_native(
+    suite_name: str,
+    learner: str,
+    budget: int,
+    trials: int,
+    seeds: list[int],
+    sampler_seed: int = 0,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Random search (Optuna's ``RandomSampler(seed=sampler_seed)``) over
+    :data:`NATIVE_SPACE` for a tabular learner at ``budget`` env steps: each trial is scored
+    by the mean final SPL over the suite's tuning tasks x ``seeds``; returns every trial."""
+    import time
+
+    import optuna
+
+    if learner not in NATIVE_TUNABLE:
+        raise SystemExit(f"tune-native: {learner!r} is not one of {', '.join(NATIVE_TUNABLE)}")
+    if budget < 1:
+        raise SystemExit(f"tune-native: --budget {budget}: must be >= 1 env step")
+    if trials < 1:
+        raise SystemExit(f"tune-native: --trials {trials}: must be >= 1")
+    suite = load_suite(suite_name)
+    suite.check_disjoint()
+    tasks = suite.tuning_tasks
+    if not tasks:
+        raise SystemExit(f"suite {suite.name}: no tuning tasks")
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.create_study(
+        direction="maximize", sampler=optuna.samplers.RandomSampler(seed=sampler_seed)
+    )
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    out: list[dict[str, Any]] = []
+    for _ in range(trials):
+        trial = study.ask()
+        hp = {
+            k: trial.suggest_float(k, lo, hi, log=log) for k, (lo, hi, log) in NATIVE_SPACE.items()
+        }
+        w0 = time.perf_counter()
+        runs = [
+            {"task": t.id, "seed": s, **native_score(learner, t, s, budget, hp)}
+            for t in tasks
+            for s in seeds
+        ]
+        value = float(np.mean([r["score"] for r in runs]))
+        study.tell(trial, value)
+        out.append(
+            {
+                "number": trial.number,
+                "values": hp,
+                "objective": value,
+                "success": float(np.mean([r["success"] for r in runs])),
+                "runs": runs,
+                "wall_time_s": time.perf_counter() - w0,
+            }
+        )
+        if progress:
+            print(
+                f"[tune-native] {learner} @ {budget}: trial {trial.number + 1}/{trials} "
+                f"{value:.3f} (best {study.best_value:.3f})",
+                file=sys.stderr,
+            )
+    best = max(out, key=lambda t: (t["objective"], -t["number"]))
+    return {
+        "learner": learner,
+        "budget": int(budget),
+        "suite": suite.name,
+        "tasks": [t.id for t in tasks],
+        "seeds": seeds,
+        "objective": "mean final SPL (the reported score) over the tuning tasks x seeds",
+        "search": {
+            "sampler": f"optuna RandomSampler(seed={sampler_seed})",
+            "space": {
+                k: {"low": lo, "high": hi, "log": log} for k, (lo, hi, log) in NATIVE_SPACE.items()
+            },
+            "fixed": {"epsilon_schedule": "env_steps", "max_env_steps": int(budget)},
+        },
+        "best": {k: best[k] for k in ("number", "values", "objective", "success")},
+        "trials": out,
+        "wall_time_s": time.perf_counter() - t0,
+        "cpu_time_s": time.process_time() - c0,
+        "machine": runner.machine(),
+        "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+
+
+def record_by_budget(path: Path, export: dict[str, Any], trials_file: str, command: str) -> None:
+    """Write the best values of a ``tune-native`` export into a hyperparameter file's
+    ``learners.<learner>.by_budget.<budget>`` entry (docs: the v2 hyperparameter file);
+    other entries stay."""
+    import json
+
+    from sixaxis_avoid.benchmark._io import atomic_write_text
+
+    data = hpmod.load(path)
+    data.pop("path", None)
+    entry = data["learners"].setdefault(export["learner"], {})
+    entry.setdefault("by_budget", {})[str(export["budget"])] = {
+        "values": export["best"]["values"],
+        "status": "tuned",
+        "command": command,
+        "trials": trials_file,
+        "objective": {"name": export["objective"], "best_value": export["best"]["objective"]},
+    }
+    atomic_write_text(Path(path), json.dumps(data, indent=1) + "\n")
+
+
+def cmd_tune_native(args: argparse.Namespace, argv: list[str]) -> int:
+    import json
+
+    from sixaxis_avoid.benchmark._io import atomic_write_text
+
+    suite = load_suite(args.suite)
+    first = int(suite.tuning.get("seeds", [0])[0])
+    # --seeds N: N seeds from the suite's first tuning seed (disjoint from the reported ones).
+    if args.seeds and "," not in args.seeds:
+        seeds = [first + k for k in range(int(args.seeds))]
+    else:
+        seeds = parse_seeds(args.seeds) or [first, first + 1, first + 2]
+    if len(seeds) < 1:
+        raise SystemExit(f"tune-native: --seeds {args.seeds!r}: need at least one seed")
+    for learner in split(args.learners):
+        export = tune_native(
+            args.suite,
+            learner,
+            args.budget,
+            args.trials,
+            seeds,
+            args.sampler_seed,
+            not args.no_progress,
+        )
+        command = command_line(argv)
+        export["command"] = command
+        out = args.out or Path("docs/results/v2-tuning") / f"{learner}-{args.budget}.json"
+        if len(split(args.learners)) > 1 and args.out:
+            out = Path(args.out).with_name(f"{learner}-{args.budget}.json")
+        atomic_write_text(Path(out), json.dumps(export, indent=1) + "\n")
+        print(
+            f"[tune-native] {learner} @ {args.budget}: best {export['best']['objective']:.3f} "
+            f"of {args.trials} trials in {export['wall_time_s']:.0f} s -> {out}",
+            file=sys.stderr,
+        )
+        if args.record:
+            record_by_budget(args.record, export, str(out), command)
+    return 0

@@ -18,3 +18,11 @@ pub fn machine() -> String {
         std::env::consts::ARCH
     )
 }
+
+/// CPU time the calling thread has run, seconds, if the OS tells (Linux: the first field of
+/// `/proc/thread-self/schedstat`, in ns); `None` elsewhere.
+pub fn thread_cpu_time_s() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns as f64 * 1e-9)
+}

@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMet
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
 use sixaxis_core::options::OptionValue;
-use sixaxis_core::qlearning::{greedy_path, train as core_train, QTable, TrainReport};
+use sixaxis_core::qlearning::{greedy_path, train_with_checkpoints, QTable, TrainReport};
 use sixaxis_core::{Cell, GridWorld, Scenario};
 
 use crate::convert::{cell, json_to_py, repr};
@@ -81,6 +81,16 @@ impl PyTrainResult {
     #[getter]
     fn length_converged_episode(&self) -> Option<u32> {
         self.report.length_converged_episode
+    }
+    /// The checkpoints of ``train(..., checkpoints=[...])`` the run reached, in order: one
+    /// dict per checkpoint with ``env_steps``, ``episode`` (from 0), ``path`` (list of cells,
+    /// or None), ``wall_time_s`` and ``cpu_time_s`` (of the learning thread, None where the
+    /// OS does not tell) since the call began. Empty without checkpoints.
+    #[getter]
+    fn checkpoints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(&self.report.checkpoints)
+            .map_err(|e| invalid_argument(py, "checkpoints", "TrainResult", e.to_string()))?;
+        json_to_py(py, &v)
     }
     #[getter]
     fn total_steps(&self) -> u64 {
@@ -252,24 +262,39 @@ enum Table {
 /// units, docs and defaults): ``episodes`` (a number or ``"auto"``), ``episode_cap``,
 /// ``seed``, ``assist`` (eqs. 9 and 10 together), ``detour`` (eq. 9), ``distance`` (eq. 10),
 /// ``max_steps_per_episode``, ``q_precision``, ``alpha``, ``gamma``, ``epsilon_start``,
-/// ``epsilon_decay_episodes``; one left out or ``None`` takes the scenario's ``learning``
-/// value. ``initial_q`` is how the Q-table starts: ``"zero"`` (the paper's),
+/// ``epsilon_decay_episodes``, ``max_env_steps`` (an env-step budget), ``epsilon_schedule``
+/// (``"episodes"`` or ``"env_steps"``), ``epsilon_decay_fraction``; one left out or ``None``
+/// takes the scenario's ``learning`` value. ``checkpoints`` is a list of increasing env-step
+/// counts at which the learner records the greedy path of its current table without
+/// stopping (:attr:`TrainResult.checkpoints`; the run is the same as without). ``initial_q`` is how the Q-table starts: ``"zero"`` (the paper's),
 /// ``"distance"`` (an optimistic bound from the Manhattan distance to the target, see
 /// docs/SCENARIOS.md), or a ``(num_states, 6)`` float64 or float32 array to resume from
 /// (converted to the run's ``q_precision``). ``progress(episodes_done)`` is called about 100
 /// times; an exception it raises is re-raised after training. The GIL is released while
 /// learning.
 #[pyfunction]
-#[pyo3(signature = (scenario=None, *, extra_obstacles=None, initial_q=None, progress=None, **options))]
+#[pyo3(signature = (scenario=None, *, extra_obstacles=None, initial_q=None, progress=None, checkpoints=None, **options))]
 pub fn train(
     py: Python<'_>,
     scenario: Option<&Bound<'_, PyAny>>,
     extra_obstacles: Option<&Bound<'_, PyAny>>,
     initial_q: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
+    checkpoints: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyTrainResult> {
     let s = scenario_from_any(py, scenario)?;
+    let checkpoints: Vec<u64> = match checkpoints.filter(|o| !o.is_none()) {
+        None => Vec::new(),
+        Some(o) => o.extract().map_err(|_| {
+            invalid_argument(
+                py,
+                "checkpoints",
+                repr(o),
+                "must be a list of env-step counts (integers >= 1)",
+            )
+        })?,
+    };
     let mut req = train_request(py, "train", options)?;
     // `initial_q`: a rule by name (an option like the others) or a table to start from.
     let table = match initial_q.filter(|o| !o.is_none()) {
@@ -295,6 +320,7 @@ pub fn train(
         let opts = &opts;
         let cb_error = &cb_error;
         let progress = progress.as_ref();
+        let checkpoints = &checkpoints;
         run(py, move || {
             let report = |done: u32| {
                 if let Some(cb) = progress {
@@ -311,7 +337,7 @@ pub fn train(
             } else {
                 None
             };
-            core_train(world, opts, q0, progress_fn)
+            train_with_checkpoints(world, opts, q0, progress_fn, checkpoints)
         })?
     };
     if let Some(e) = cb_error.into_inner().unwrap_or_else(|p| p.into_inner()) {

@@ -5,14 +5,14 @@ use std::time::Instant;
 
 use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::initial::distance_bound_table;
 use super::table::*;
 use super::AUTO_MIN_HORIZON;
 use crate::error::{Error, Result};
 use crate::grid::{GridWorld, Transition, NUM_ACTIONS};
-use crate::scenario::{Cell, InitialQ, Learning};
+use crate::scenario::{Cell, EpsilonSchedule, InitialQ, Learning};
 
 /// One update of eq. 6 for the step `state --action--> t`: bootstraps from
 /// `max_a' Q(t.next, a')` unless `t.reached` (the target is terminal). Returns the new
@@ -30,6 +30,24 @@ pub fn q_update(
     let v = updated(q.get(state, action), t.reward, bootstrap, alpha, gamma);
     q.set(state, action, v);
     q.get(state, action)
+}
+
+/// The greedy path of the Q-table being learned, recorded during a run of
+/// [`train_with_checkpoints`] after a given number of env steps (the run goes on).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// Env steps taken when it was recorded (over all episodes of the run).
+    pub env_steps: u64,
+    /// The episode (from 0) whose step was the `env_steps`-th.
+    pub episode: u32,
+    /// The greedy path (eq. 8, [`greedy_path`] with `max_steps_per_episode`) of the table
+    /// after that step, start..=target; `None` if it fails.
+    pub path: Option<Vec<Cell>>,
+    /// Wall time since the call began, seconds.
+    pub wall_time_s: f64,
+    /// CPU time of the learning thread since the call began, seconds (`None` where the OS
+    /// does not tell; see [`crate::host::thread_cpu_time_s`]).
+    pub cpu_time_s: Option<f64>,
 }
 
 /// What [`train`] returns.
@@ -51,6 +69,9 @@ pub struct TrainResult {
     pub total_steps: u64,
     /// Wall time of the call, seconds.
     pub wall_time_s: f64,
+    /// The checkpoints of [`train_with_checkpoints`] the run reached, in order (empty for
+    /// [`train`]).
+    pub checkpoints: Vec<Checkpoint>,
     /// The learned Q-table.
     #[serde(skip)]
     pub q: QTable,
@@ -120,20 +141,69 @@ pub fn train(
     initial_q: Option<QTable>,
     progress: Option<&dyn Fn(u32)>,
 ) -> Result<TrainResult> {
-    train_impl(world, opts, initial_q, progress, false)
+    train_impl(world, opts, initial_q, progress, &[], false)
 }
 
-/// [`train`]; with `rollout_every_episode` the greedy path is recomputed after every
-/// episode (the reference for the incremental bookkeeping, for tests).
+/// [`train`], recording a [`Checkpoint`] (the greedy path of the current table, wall and
+/// CPU time) when the run has taken exactly `checkpoints[i]` env steps, without stopping
+/// or changing the run: its result is [`train`]'s, plus the checkpoints. A checkpoint's
+/// path is that of the final path of the same run stopped there (`max_env_steps` =
+/// that count, the epsilon schedule unchanged; tested). `checkpoints` must be increasing
+/// counts >= 1, none beyond `max_env_steps` when it is set; those after the run's last step
+/// (its episodes done first) are not recorded.
+pub fn train_with_checkpoints(
+    world: &GridWorld,
+    opts: &Learning,
+    initial_q: Option<QTable>,
+    progress: Option<&dyn Fn(u32)>,
+    checkpoints: &[u64],
+) -> Result<TrainResult> {
+    train_impl(world, opts, initial_q, progress, checkpoints, false)
+}
+
+/// Checkpoint counts are increasing, >= 1 and within the budget; the error names
+/// `checkpoints` and the value.
+fn check_checkpoints(checkpoints: &[u64], opts: &Learning) -> Result<()> {
+    let mut last = 0u64;
+    for &c in checkpoints {
+        if c <= last {
+            let reason = if c == 0 {
+                "every checkpoint must be >= 1 env step".to_string()
+            } else {
+                format!("checkpoints must increase (one after {last})")
+            };
+            return Err(Error::argument("checkpoints", c, reason));
+        }
+        if opts.max_env_steps > 0 && c > opts.max_env_steps {
+            return Err(Error::argument(
+                "checkpoints",
+                c,
+                format!("is beyond max_env_steps = {}", opts.max_env_steps),
+            ));
+        }
+        last = c;
+    }
+    Ok(())
+}
+
+/// [`train_with_checkpoints`]; with `rollout_every_episode` the greedy path is recomputed
+/// after every episode (the reference for the incremental bookkeeping, for tests).
 pub(super) fn train_impl(
     world: &GridWorld,
     opts: &Learning,
     initial_q: Option<QTable>,
     progress: Option<&dyn Fn(u32)>,
+    checkpoints: &[u64],
     rollout_every_episode: bool,
 ) -> Result<TrainResult> {
     let started = Instant::now();
     opts.validate()?;
+    check_checkpoints(checkpoints, opts)?;
+    let cpu_started = if checkpoints.is_empty() {
+        None
+    } else {
+        crate::host::thread_cpu_time_s()
+    };
     let n = world.num_states();
     let q = match initial_q {
         Some(q) if q.num_states() != n => {
@@ -151,19 +221,20 @@ pub(super) fn train_impl(
     };
     // One dispatch on the value type per run; the loop itself is generic.
     Ok(
-        with_rows!(q.rows, rows => learn(world, opts, rows, progress, rollout_every_episode, started)),
+        with_rows!(q.rows, rows => learn(world, opts, rows, progress, checkpoints, rollout_every_episode, (started, cpu_started))),
     )
 }
 
 /// The episodes of [`train_impl`], learning on `rows` (the run's table); `started` is when
-/// the call began (for `wall_time_s`).
+/// the call began and the thread's CPU time then (for `wall_time_s` and the checkpoints).
 fn learn<V: QValue>(
     world: &GridWorld,
     opts: &Learning,
     mut rows: Vec<[V; NUM_ACTIONS]>,
     progress: Option<&dyn Fn(u32)>,
+    checkpoints: &[u64],
     rollout_every_episode: bool,
-    started: Instant,
+    (started, cpu_started): (Instant, Option<f64>),
 ) -> TrainResult {
     let n = world.num_states();
     let qr: &mut [[V; NUM_ACTIONS]] = &mut rows;
@@ -191,17 +262,37 @@ fn learn<V: QValue>(
     let chunk = episodes.div_ceil(100).max(1);
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
 
-    // A fixed run knows its length; an auto run grows its vectors as it goes.
+    // The env-step budget (none: never reached), and the next step count at which the run
+    // stops or records a checkpoint.
+    let budget = if opts.max_env_steps > 0 {
+        opts.max_env_steps
+    } else {
+        u64::MAX
+    };
+    let mut next_checkpoint = 0usize;
+    let next_stop_of = |i: usize| checkpoints.get(i).map_or(budget, |&c| c.min(budget));
+    let mut next_stop = next_stop_of(0);
+    let mut recorded = Vec::with_capacity(checkpoints.len());
+    let (mut cp_stamp, mut cp_act, mut cp_path) = (Vec::new(), Vec::new(), Vec::new());
+    let mut cp_gen = 0u32;
+    if !checkpoints.is_empty() {
+        cp_stamp = vec![0u32; n];
+        cp_act = vec![0u8; n];
+    }
+    let per_step_epsilon = opts.epsilon_schedule == EpsilonSchedule::EnvSteps;
+    // A fixed run knows its length (at most); an auto run grows its vectors as it goes.
     let reserve = if opts.episodes_auto {
         0
     } else {
-        episodes as usize
+        (episodes as u64).min(budget) as usize
     };
     let mut steps_per_episode = Vec::with_capacity(reserve);
     let mut reached_per_episode = Vec::with_capacity(reserve);
     // episodes_auto: the episode after which the greedy path first reached the target.
     let mut first_reach: Option<u32> = None;
-    let mut total_steps = 0u64;
+    // Env steps over all episodes so far (the step being taken is the `t`-th, from 0).
+    let mut t = 0u64;
+    let mut out_of_budget = false;
 
     // Greedy-path tracking for the converged episode.
     let mut stamp = vec![0u32; n];
@@ -233,7 +324,7 @@ fn learn<V: QValue>(
         } else {
             opts.epsilon(ep)
         };
-        let explore_threshold = (epsilon * 4_294_967_296.0).ceil() as u64;
+        let mut explore_threshold = (epsilon * 4_294_967_296.0).ceil() as u64;
         let mut s = start;
         let mut last_collided = NO_ACTION;
         let mut steps = 0u32;
@@ -242,6 +333,9 @@ fn learn<V: QValue>(
         // max_a Q(s, a), carried from the previous step's bootstrap when still valid.
         let mut s_max = row_max(&qr[s]);
         while steps < max_steps {
+            if per_step_epsilon {
+                explore_threshold = (opts.epsilon_at_step(t) * 4_294_967_296.0).ceil() as u64;
+            }
             // Action selection (eq. 7).
             let a = if explore_threshold > 0 && (rng.next_u32() as u64) < explore_threshold {
                 rng.random_range(0..NUM_ACTIONS as u32) as usize
@@ -281,11 +375,34 @@ fn learn<V: QValue>(
             last_collided = if collided { a } else { NO_ACTION };
             steps += 1;
             s = ns;
+            t += 1;
+            if t == next_stop {
+                if next_checkpoint < checkpoints.len() && checkpoints[next_checkpoint] == t {
+                    // A fresh rollout on scratch buffers: the tracked path's stamps stay.
+                    cp_gen += 1;
+                    let (stamp, act) = (&mut cp_stamp, &mut cp_act);
+                    let ok = rollout(world, qr, max_steps, stamp, act, cp_gen, &mut cp_path);
+                    recorded.push(Checkpoint {
+                        env_steps: t,
+                        episode: ep,
+                        path: ok
+                            .then(|| cp_path.iter().map(|&c| world.cell_of(c as usize)).collect()),
+                        wall_time_s: started.elapsed().as_secs_f64(),
+                        cpu_time_s: cpu_started
+                            .and_then(|c0| crate::host::thread_cpu_time_s().map(|c| c - c0)),
+                    });
+                    next_checkpoint += 1;
+                }
+                if t == budget {
+                    out_of_budget = true;
+                    break;
+                }
+                next_stop = next_stop_of(next_checkpoint);
+            }
             if reached {
                 break;
             }
         }
-        total_steps += steps as u64;
         steps_per_episode.push(steps);
         reached_per_episode.push(reached);
         if dirty {
@@ -314,7 +431,7 @@ fn learn<V: QValue>(
             path_ok = ok;
         }
         if let Some(p) = progress {
-            if (ep + 1) % chunk == 0 || ep + 1 == episodes {
+            if (ep + 1) % chunk == 0 || ep + 1 == episodes || out_of_budget {
                 p(ep + 1);
             }
         }
@@ -324,6 +441,9 @@ fn learn<V: QValue>(
             if ep >= e1 + h && ep - last_change >= h {
                 break;
             }
+        }
+        if out_of_budget {
+            break;
         }
     }
 
@@ -338,8 +458,9 @@ fn learn<V: QValue>(
         reached_per_episode,
         converged_episode: path_ok.then_some(last_change),
         length_converged_episode: path_ok.then_some(last_length_change),
-        total_steps,
+        total_steps: t,
         wall_time_s: started.elapsed().as_secs_f64(),
+        checkpoints: recorded,
         q: QTable {
             rows: V::wrap(rows),
         },

@@ -8,6 +8,8 @@
 //! Entry points:
 //! - [`train`] — learn a [`QTable`] on a [`GridWorld`](crate::grid::GridWorld) with [`Learning`]; returns the
 //!   learned path, per-episode statistics and the converged episode ([`TrainResult`]).
+//! - [`train_with_checkpoints`] — [`train`], recording the greedy path at given env-step
+//!   counts on the way ([`Checkpoint`]: the learning curve of one run).
 //! - [`greedy_path`] — the learned path (`place`, eq. 8) of a Q-table.
 //! - [`q_update`] — one update of eq. 6 (the learner uses the same arithmetic).
 //! - [`QTable::save`] / [`QTable::load`] — atomic Q-table files, checked against the world.
@@ -69,6 +71,23 @@
 //!   episode `eta >= e1 + H` after which the greedy path reaches the target and has not
 //!   changed for `H` episodes (tracked exactly after every episode). `epsilon_decay_episodes`
 //!   is not used. Hitting the cap ends the run like a fixed run of that length.
+//! - **Env-step budget** (`max_env_steps`, ours; 0, none, is the paper's): the run stops
+//!   right after its `max_env_steps`-th env step over all episodes, mid-episode if need be
+//!   (that last, cut episode counts in `steps_per_episode` and is not reached unless its last
+//!   step reached the target), or after `episodes` episodes, whichever comes first.
+//! - **`epsilon_schedule = "env_steps"`** (ours; `"episodes"`, eq. 7 over
+//!   `epsilon_decay_episodes`, stays the default and gives the same results bit for bit):
+//!   the `t`-th env step of the run (from 0) explores with
+//!   `epsilon = epsilon_start * (1 - t / D)` for `t < D`, else 0, with
+//!   `D = epsilon_decay_fraction * max_env_steps` (default 0.99, the paper's M / eta_set =
+//!   9900 / 10000); it needs `max_env_steps` and does not combine with `episodes_auto`.
+//!   The draw per step is the one described above, with this epsilon.
+//! - **Checkpoints** ([`train_with_checkpoints`]): right after the run's `c`-th env step, for
+//!   each requested `c`, the learner records the greedy path of the current table
+//!   ([`greedy_path`] with `max_steps_per_episode`, computed on buffers of its own) with the
+//!   episode, wall and CPU time so far, and goes on: the run is the same as without
+//!   checkpoints, and each checkpoint's path is the final path of the same run stopped at
+//!   `max_env_steps = c` with the same schedule (tested).
 //! - **`initial_q = "distance"`** (`learning.initial_q`, `--initial-q distance`; ours, the
 //!   paper's Q = 0 stays the default): with no table given, Q starts at
 //!   [`distance_bound_table`], an optimistic bound of the return of each move. A move costs
@@ -116,7 +135,7 @@ mod tests;
 
 pub use crate::scenario::{Learning, AUTO_EPISODE_CAP};
 pub use initial::{distance_bound_table, distance_bound_values};
-pub use learner::{greedy_path, q_update, train, TrainResult};
+pub use learner::{greedy_path, q_update, train, train_with_checkpoints, Checkpoint, TrainResult};
 pub use report::TrainReport;
 pub use table::QTable;
 

@@ -3,9 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::learner::TrainResult;
+use super::learner::{Checkpoint, TrainResult};
 use crate::grid::GridWorld;
-use crate::scenario::{Assist, Cell, InitialQ, Learning, QPrecision, Scenario};
+use crate::scenario::{Assist, Cell, EpsilonSchedule, InitialQ, Learning, QPrecision, Scenario};
 
 /// What a training run reports: the options it ran with and what it learned, the one
 /// serialisation of a run (the JSON of `sixaxis train` and Python's `TrainResult.to_dict()`).
@@ -19,6 +19,12 @@ pub struct TrainReport {
     pub episodes: u32,
     /// Whether the run stopped when the greedy path settled (`episodes = "auto"`).
     pub episodes_auto: bool,
+    /// The env-step budget (0: none).
+    #[serde(default)]
+    pub max_env_steps: u64,
+    /// What epsilon fell over.
+    #[serde(default)]
+    pub epsilon_schedule: EpsilonSchedule,
     /// How the Q-table started.
     pub initial_q: InitialQ,
     /// The type of the Q-values.
@@ -55,6 +61,9 @@ pub struct TrainReport {
     /// Whether each episode reached the target (left out of a report without curves).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reached_per_episode: Option<Vec<bool>>,
+    /// The checkpoints recorded ([`super::train_with_checkpoints`]; left out when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub checkpoints: Vec<Checkpoint>,
 }
 
 impl TrainReport {
@@ -72,6 +81,8 @@ impl TrainReport {
             seed: opts.seed,
             episodes: opts.episodes,
             episodes_auto: opts.episodes_auto,
+            max_env_steps: opts.max_env_steps,
+            epsilon_schedule: opts.epsilon_schedule,
             initial_q: opts.initial_q,
             q_precision: opts.q_precision,
             q_table_bytes: r.q.num_states() * r.q.bytes_per_state(),
@@ -98,6 +109,7 @@ impl TrainReport {
             },
             steps_per_episode: curves.then(|| r.steps_per_episode.clone()),
             reached_per_episode: curves.then(|| r.reached_per_episode.clone()),
+            checkpoints: r.checkpoints.clone(),
         }
     }
 }

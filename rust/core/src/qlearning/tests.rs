@@ -200,8 +200,8 @@ fn tracked_path_equals_fresh_rollout() {
         o.epsilon_decay_episodes = 1980;
         o.seed = seed;
         o.set_assist(assist);
-        let fast = train_impl(&w, &o, None, None, false).unwrap();
-        let slow = train_impl(&w, &o, None, None, true).unwrap();
+        let fast = train_impl(&w, &o, None, None, &[], false).unwrap();
+        let slow = train_impl(&w, &o, None, None, &[], true).unwrap();
         assert_eq!(fast.q, slow.q);
         assert_eq!(fast.path, slow.path);
         assert_eq!(

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::Scenario;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::options::{check_all, named_enum, option_set, Domain, FromOption, OptionValue};
 
 /// Reward parameters (eqs. 5, 9, 10). Penalties are given as positive magnitudes.
@@ -56,6 +56,13 @@ const UNIT: Domain = Domain::Float {
     open_min: false,
 };
 
+/// The domain of a finite non-negative number.
+const NON_NEGATIVE: Domain = Domain::Float {
+    min: 0.0,
+    max: f64::INFINITY,
+    open_min: false,
+};
+
 option_set! {
     /// Q-learning parameters (eqs. 6-7) and the assisted strategies: the scenario's
     /// `learning` section and the options of a training run (the one declaration of the
@@ -91,6 +98,17 @@ option_set! {
         epsilon_start: f64 = 0.1; "epsilon_start", UNIT, "";
         /// M: episodes over which epsilon falls linearly to 0 (eq. 7).
         epsilon_decay_episodes: u32 = 9900; "epsilon_decay_episodes", Domain::u32_from(0), "episodes";
+        /// Env-step budget (ours; 0: none, the paper's): training stops after this many env
+        /// steps over all episodes, mid-episode if need be, or after `episodes`, whichever
+        /// comes first.
+        max_env_steps: u64 = 0; "max_env_steps", Domain::u64_from(0), "env steps";
+        /// What epsilon falls over: `episodes` (the paper's eq. 7, over
+        /// `epsilon_decay_episodes`) or `env_steps` (ours: over the first
+        /// `epsilon_decay_fraction` x `max_env_steps` env steps; needs `max_env_steps`).
+        epsilon_schedule: EpsilonSchedule = EpsilonSchedule::Episodes; "epsilon_schedule", EpsilonSchedule::DOMAIN, "";
+        /// With `epsilon_schedule = "env_steps"`: the fraction of `max_env_steps` over which
+        /// epsilon falls linearly to 0 (0.99: the paper's M / eta_set = 9900 / 10000).
+        epsilon_decay_fraction: f64 = 0.99; "epsilon_decay_fraction", NON_NEGATIVE, "";
     }
 }
 
@@ -144,7 +162,7 @@ impl Learning {
         self
     }
 
-    /// Check the ranges; the error names the option.
+    /// Check the ranges and the rules between options; the error names the option.
     pub fn validate(&self) -> Result<()> {
         check_all(Self::OPTIONS, self, |i| {
             if i.key.is_empty() {
@@ -152,7 +170,44 @@ impl Learning {
             } else {
                 i.key
             }
-        })
+        })?;
+        if self.epsilon_schedule == EpsilonSchedule::EnvSteps {
+            let schedule = self.epsilon_schedule.name();
+            if self.max_env_steps == 0 {
+                return Err(Error::argument(
+                    "epsilon_schedule",
+                    schedule,
+                    "needs a budget: max_env_steps >= 1",
+                ));
+            }
+            if self.episodes_auto {
+                return Err(Error::argument(
+                    "epsilon_schedule",
+                    schedule,
+                    "does not combine with episodes = \"auto\" (which has its own schedule)",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// D of `epsilon_schedule = "env_steps"`: `epsilon_decay_fraction * max_env_steps`, the
+    /// env steps over which epsilon falls to 0.
+    pub fn epsilon_decay_steps(&self) -> f64 {
+        self.epsilon_decay_fraction * self.max_env_steps as f64
+    }
+
+    /// Exploration rate of env step `t` (counted from 0 over the run) with
+    /// `epsilon_schedule = "env_steps"`: `epsilon_start * (1 - t / D)` for `t < D`, else 0
+    /// ([`Learning::epsilon_decay_steps`]).
+    pub fn epsilon_at_step(&self, t: u64) -> f64 {
+        let d = self.epsilon_decay_steps();
+        let t = t as f64;
+        if t < d {
+            self.epsilon_start * (1.0 - t / d)
+        } else {
+            0.0
+        }
     }
 
     /// Exploration rate of episode `episode` (counted from 0), eq. 7.
@@ -196,6 +251,17 @@ impl Assist {
     /// The scenario's `learning.assist_detour` / `learning.assist_distance`.
     pub fn from_scenario(s: &Scenario) -> Self {
         s.learning.assist()
+    }
+}
+
+named_enum! {
+    /// What the learner's epsilon falls over (`learning.epsilon_schedule`).
+    pub enum EpsilonSchedule (default Episodes) {
+        /// Over episodes, eq. 7 (`epsilon_decay_episodes`): the paper's, the default.
+        Episodes = "episodes",
+        /// Ours: over env steps, linearly to 0 over the first `epsilon_decay_fraction` x
+        /// `max_env_steps` steps of the run (a budget in env steps).
+        EnvSteps = "env_steps",
     }
 }
 

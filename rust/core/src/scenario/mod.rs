@@ -41,7 +41,9 @@ pub mod learning;
 pub mod planning;
 
 pub use geometry::{Bounds, DistanceTo, ObstacleBox};
-pub use learning::{Assist, InitialQ, Learning, QPrecision, Rewards, AUTO_EPISODE_CAP};
+pub use learning::{
+    Assist, EpsilonSchedule, InitialQ, Learning, QPrecision, Rewards, AUTO_EPISODE_CAP,
+};
 pub use planning::{ArmSpec, ClearanceModel, Planning, PoseSearchMode};
 
 /// A grid cell (integer coordinates, cells). Its centre is at `cell * cell_mm` mm.

@@ -135,6 +135,7 @@ fn trained(w: &GridWorld, sc: &Scenario, episodes: u32, seed: u64) -> QTable {
 }
 
 mod bfs;
+mod budget;
 mod f32;
 mod files;
 mod learner;
