@@ -39,6 +39,7 @@ def test_trials_are_seeded_scored_on_every_task_and_seed_and_exported(tmp_path):
     assert set(entry) == {"4000", "8000"}
     assert entry["4000"]["values"] == a["best"]["values"]
     assert entry["4000"]["status"] == "tuned" and entry["4000"]["trials"] == "trials.json"
+    assert entry["4000"]["objective"] == a["best"]["objective"]  # a number, as jax_tune's
 
 
 def test_the_command_writes_the_export(tmp_path, capsys):

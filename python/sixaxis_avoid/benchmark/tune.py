@@ -260,7 +260,9 @@ def record_by_budget(path: Path, export: dict[str, Any], trials_file: str, comma
         "status": "tuned",
         "command": command,
         "trials": trials_file,
-        "objective": {"name": export["objective"], "best_value": export["best"]["objective"]},
+        # The best trial's objective, a number as jax_tune writes it (the report shows it).
+        "objective": export["best"]["objective"],
+        "objective_name": export["objective"],
     }
     atomic_write_text(Path(path), json.dumps(data, indent=1) + "\n")
 
