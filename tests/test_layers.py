@@ -52,10 +52,16 @@ LAYERS = [
     "sixaxis_avoid.benchmark.algorithm2",
     "sixaxis_avoid.benchmark.learners",
     "sixaxis_avoid.benchmark.runner",
+    # The JAX learners build on the learners and the runner's records; the runner reaches
+    # them through the learner class (learners.PLUGINS), not by import.
+    "sixaxis_avoid.benchmark.jax_learners",
+    "sixaxis_avoid.benchmark.jax_runs",
+    "sixaxis_avoid.benchmark.jax_tune",
+    "sixaxis_avoid.benchmark.agreement",
     "sixaxis_avoid.benchmark.longer",
     "sixaxis_avoid.benchmark.report",
+    "sixaxis_avoid.benchmark.report_v2",
     "sixaxis_avoid.benchmark.tune",
-    "sixaxis_avoid.benchmark.jax_learners",
     "sixaxis_avoid.benchmark",
     "sixaxis_avoid.benchmark.__main__",
 ]

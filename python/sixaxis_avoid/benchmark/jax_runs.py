@@ -18,6 +18,7 @@ import socket
 import time
 from typing import Any, ClassVar
 
+from sixaxis_avoid.benchmark.jax_learners import DQN_DEFAULTS, PPO_DEFAULTS
 from sixaxis_avoid.benchmark.learners import Learner, RunContext, same_world
 
 SEED_FREE = ("seed",)
@@ -39,54 +40,17 @@ class JaxLearner(Learner):
     def greedy_path(self, world: Any) -> Any:
         raise RuntimeError(f"{type(self).__name__}: paths come from jax_runs.run_group")
 
+    # How the runner trains this family (it dispatches through the class, so it needs no
+    # import of this module, which is layered above it).
+    @staticmethod
+    def groups(specs: list[dict[str, Any]]) -> list[list[dict[str, Any]]]:
+        """:func:`groups`: the specs that train together."""
+        return groups(specs)
 
-#: Env settings every JAX learner shares with the SB3 learners (``learners.ENV_DEFAULTS``).
-ENV_DEFAULTS: dict[str, Any] = {"reward_scale": 1e-4, "assist": True}
-
-#: PPO's values: suite v1's tuned SB3 PPO values (hyperparams/v1.json), SB3's tanh and
-#: vf_coef 0.5 and max_grad_norm 0.5, a constant learning rate.
-PPO_DEFAULTS: dict[str, Any] = {
-    **ENV_DEFAULTS,
-    "max_episode_steps": 1000,
-    "learning_rate": 0.0025083101485988907,
-    "lr_schedule": "constant",
-    "gamma": 0.9,
-    "net_arch": [128, 128],
-    "activation": "tanh",
-    "n_envs": 8,
-    "n_steps": 64,
-    "batch_size": 128,
-    "n_epochs": 5,
-    "gae_lambda": 0.9,
-    "clip_range": 0.1,
-    "ent_coef": 0.00011201827711749114,
-    "vf_coef": 0.5,
-    "max_grad_norm": 0.5,
-}
-
-#: DQN's values: suite v1's tuned SB3 DQN values (hyperparams/v1.json), SB3's ReLU, initial
-#: exploration 1.0 and max_grad_norm 10, a constant learning rate. SB3 steps one env
-#: ``train_freq`` times between update phases; rejax steps ``train_freq`` envs once (its
-#: ``num_envs``), so the env steps between update phases and the updates per env step match.
-DQN_DEFAULTS: dict[str, Any] = {
-    **ENV_DEFAULTS,
-    "max_episode_steps": 100,
-    "learning_rate": 0.001235896055013618,
-    "lr_schedule": "constant",
-    "gamma": 0.99,
-    "net_arch": [128, 128],
-    "activation": "relu",
-    "batch_size": 128,
-    "buffer_size": 10_000,
-    "learning_starts": 1000,
-    "target_update_interval": 500,
-    "train_freq": 8,
-    "gradient_steps": 4,
-    "exploration_fraction": 0.47873705518264326,
-    "exploration_initial_eps": 1.0,
-    "exploration_final_eps": 0.09495382193734919,
-    "max_grad_norm": 10.0,
-}
+    @staticmethod
+    def run_group(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """:func:`run_group`: one vmapped call, one record per spec."""
+        return run_group(specs)
 
 
 class JaxPPO(JaxLearner):

@@ -693,9 +693,13 @@ BUILTIN: dict[str, type[Learner]] = {
 }
 
 
-# The JAX learners (jax_ppo, jax_dqn; family "jax"), by name but not in BUILTIN (the default
-# study and its tests run BUILTIN): their module imports JAX only when they run.
-from sixaxis_avoid.benchmark.jax_runs import LEARNERS as JAX_LEARNERS  # noqa: E402
+#: Learners found by name but not in BUILTIN (the default study and its tests run BUILTIN),
+#: as ``module:Class`` paths resolved on use: the JAX learners (family "jax") live above this
+#: module (they build on it) and import JAX only when they run.
+PLUGINS: dict[str, str] = {
+    "jax_ppo": "sixaxis_avoid.benchmark.jax_runs:JaxPPO",
+    "jax_dqn": "sixaxis_avoid.benchmark.jax_runs:JaxDQN",
+}
 
 
 class LearnerError(ValueError):
@@ -706,8 +710,8 @@ def resolve(name: str) -> type[Learner]:
     """A built-in learner by name, or a user's as ``module:Class``."""
     if name in BUILTIN:
         return BUILTIN[name]
-    if name in JAX_LEARNERS:
-        return JAX_LEARNERS[name]
+    if name in PLUGINS:
+        return resolve(PLUGINS[name])
     if ":" not in name:
         raise LearnerError(
             f"learner {name!r}: not built in ({', '.join(BUILTIN)}) and not module:Class"

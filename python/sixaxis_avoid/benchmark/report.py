@@ -21,8 +21,7 @@ import numpy as np
 from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
-from sixaxis_avoid.benchmark.jax_runs import LEARNERS as JAX_LEARNERS
-from sixaxis_avoid.benchmark.learners import BUILTIN
+from sixaxis_avoid.benchmark.learners import BUILTIN, PLUGINS, resolve
 from sixaxis_avoid.benchmark.longer import (
     analyse_longer,
     change_label,
@@ -76,7 +75,7 @@ def fmt_time(v: Any) -> str:
 
 
 def title(learner: str) -> str:
-    cls = BUILTIN.get(learner) or JAX_LEARNERS.get(learner)
+    cls = BUILTIN.get(learner) or (resolve(learner) if learner in PLUGINS else None)
     return cls.title if cls else f"user learner `{learner}`"
 
 

@@ -234,9 +234,7 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
     import sixaxis_avoid as sa
 
     if spec.get("family") == "jax":  # trains its seeds vmapped: docs/PERFORMANCE.md
-        from sixaxis_avoid.benchmark.jax_runs import run_group
-
-        return run_group([spec])[0]
+        return resolve(spec["learner"]).run_group([spec])[0]
     try:  # one thread per run: the same result on any machine, and no oversubscription
         import torch
 
@@ -451,10 +449,9 @@ def run_study(
     started = False
     jax_specs = [s for s in todo if s.get("family") == "jax"]
     if jax_specs:  # all seeds of a (learner, task) in one vmapped call, in this process
-        from sixaxis_avoid.benchmark.jax_runs import groups, run_group
-
-        for group in groups(jax_specs):
-            for record in run_group(group):
+        cls = resolve(jax_specs[0]["learner"])  # the groups and their runs: jax_runs
+        for group in cls.groups(jax_specs):
+            for record in resolve(group[0]["learner"]).run_group(group):
                 done(record)
     rest = [s for s in todo if s.get("family") != "jax"]
     if not use_ray:
