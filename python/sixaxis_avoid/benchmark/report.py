@@ -34,6 +34,7 @@ from sixaxis_avoid.benchmark.longer import (
     run_hours,
 )
 from sixaxis_avoid.benchmark.runner import load_runs, task_of
+from sixaxis_avoid.benchmark.stats import fmt_steps
 
 COLORS = {
     "q_assist": "tab:blue",
@@ -50,17 +51,6 @@ def fmt(v: Any, spec: str = ".2f") -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "—"
     return format(v, spec) if isinstance(v, float) else str(v)
-
-
-def fmt_steps(v: Any) -> str:
-    if v is None:
-        return "—"
-    v = float(v)
-    if v >= 1e6:
-        return f"{v / 1e6:.2f}M"
-    if v >= 1e4:
-        return f"{v / 1e3:.0f}k"
-    return f"{v:.0f}"
 
 
 def fmt_time(v: Any) -> str:

@@ -26,6 +26,7 @@ from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.runner import load_runs
+from sixaxis_avoid.benchmark.stats import fmt_steps
 from sixaxis_avoid.benchmark.tasks import Suite, load_suite
 
 #: Learners reported as the paper's reproduction, outside the ranking (docs/BENCHMARKS.md).
@@ -33,17 +34,6 @@ REPRODUCTION = ("q_paper",)
 
 #: The README's copy of the headline (scripts/docsections.py).
 HEADLINE_SECTION = "benchmark-headline"
-
-
-def fmt_steps(v: Any) -> str:
-    if v is None:
-        return "—"
-    v = float(v)
-    if v >= 1e6:
-        return f"{v / 1e6:.2f}M"
-    if v >= 1e4:
-        return f"{v / 1e3:.0f}k"
-    return f"{v:.0f}"
 
 
 def fmt_ci(point: float, ci: list[float], digits: int = 3) -> str:

@@ -27,6 +27,18 @@ TAUS = np.linspace(0.0, 1.0, 41)
 NO_CI = "(1 seed: no CI)"
 
 
+def fmt_steps(v: Any) -> str:
+    """Env steps for a table: ``30k``, ``1.00M``, ``512``; ``—`` for None."""
+    if v is None:
+        return "—"
+    v = float(v)
+    if v >= 1e6:
+        return f"{v / 1e6:.2f}M"
+    if v >= 1e4:
+        return f"{v / 1e3:.0f}k"
+    return f"{v:.0f}"
+
+
 def interval_text(point: float, lo_hi: list[float], seeds: int = 2, digits: int = 2) -> str:
     """``0.60 [0.42, 0.89]``, or ``0.60 (1 seed: no CI)`` with one run per task."""
     if seeds < 2:
