@@ -35,3 +35,18 @@ def algorithm2_record(
         "learning_steps": int(sum(int(rd.get("total_steps") or 0) for rd in r.rounds)),
     }
     return result, {"wall_time_s": time.perf_counter() - t0}
+
+
+def algorithm1_record(scenario: Any, path: Any) -> dict[str, Any] | None:
+    """Algorithm 1 (pose planning) on a learned path, as a run file records it: whether every
+    point got a pose, and the first point that got none; None without a path."""
+    import sixaxis_avoid as sa
+
+    if path is None:
+        return None
+    alg1 = sa.PosePlanner(scenario).plan_poses(path)
+    blocked = alg1["blocked_cell"]
+    return {
+        "complete": bool(alg1["complete"]),
+        "blocked_cell": None if blocked is None else list(blocked),
+    }

@@ -125,10 +125,9 @@ def _index(tree: Any, i: int, j: int) -> Any:
 def run_group(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Train the seeds of ``specs`` (same learner, task, budget, values; any seeds) in one
     vmapped call; one record per spec, in order, in ``runner.execute_run``'s schema."""
-    import sixaxis_avoid as sa
     from sixaxis_avoid.benchmark import jax_learners as jl
     from sixaxis_avoid.benchmark import runner
-    from sixaxis_avoid.benchmark.algorithm2 import algorithm2_record
+    from sixaxis_avoid.benchmark.algorithm2 import algorithm1_record, algorithm2_record
 
     if not specs:
         return []
@@ -197,17 +196,7 @@ def run_group(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
         if not task.is_goal:
             path = paths[0]
             cells = None if path is None else [tuple(c) for c in path]
-            alg1 = sa.PosePlanner(task.scenario).plan_poses(path) if path is not None else None
-            result["algorithm1"] = (
-                None
-                if alg1 is None
-                else {
-                    "complete": bool(alg1["complete"]),
-                    "blocked_cell": None
-                    if alg1["blocked_cell"] is None
-                    else list(alg1["blocked_cell"]),
-                }
-            )
+            result["algorithm1"] = algorithm1_record(task.scenario, path)
             replan = _Replan(algo, task, values, budget, cells)
             replan.steps = total
             result["algorithm2"], timing["algorithm2"] = algorithm2_record(

@@ -26,7 +26,7 @@ import numpy as np
 
 from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark._io import atomic_write_text
-from sixaxis_avoid.benchmark.algorithm2 import algorithm2_record
+from sixaxis_avoid.benchmark.algorithm2 import algorithm1_record, algorithm2_record
 from sixaxis_avoid.benchmark.learners import RunContext, family_of, resolve
 from sixaxis_avoid.benchmark.tasks import Suite, Task
 
@@ -231,7 +231,6 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
     """One (learner, task, seed) run: train, record the curve, score the greedy path, run
     Algorithms 1 and 2 on it. ``result`` depends on the spec alone; ``timing`` and ``host``
     on where it ran."""
-    import sixaxis_avoid as sa
 
     if spec.get("family") == "jax":  # trains its seeds vmapped: docs/PERFORMANCE.md
         return resolve(spec["learner"]).run_group([spec])[0]
@@ -294,17 +293,7 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
         result["core_converged_episode"] = learner.converged_episode
     if not task.is_goal:
         path = paths[0]
-        alg1 = sa.PosePlanner(task.scenario).plan_poses(path) if path is not None else None
-        result["algorithm1"] = (
-            None
-            if alg1 is None
-            else {
-                "complete": bool(alg1["complete"]),
-                "blocked_cell": None
-                if alg1["blocked_cell"] is None
-                else list(alg1["blocked_cell"]),
-            }
-        )
+        result["algorithm1"] = algorithm1_record(task.scenario, path)
         result["algorithm2"], timing["algorithm2"] = algorithm2_record(
             task.scenario,
             spec["seed"],
