@@ -131,9 +131,15 @@ impl PathLearner for QLearner {
     }
 
     fn no_path_reason(&self, round: u32) -> String {
+        // A run with an env-step budget stops at the budget, not at the episode cap.
+        let spent = if self.opts.max_env_steps > 0 {
+            format!("its budget of {} env steps", self.opts.max_env_steps)
+        } else {
+            format!("{} episodes", self.opts.episodes)
+        };
         format!(
-            "the learned greedy path does not reach the target after {} episodes (round {round}, seed {})",
-            self.opts.episodes, self.opts.seed
+            "the learned greedy path does not reach the target after {spent} (round {round}, seed {})",
+            self.opts.seed
         )
     }
 }

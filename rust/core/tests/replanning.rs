@@ -194,6 +194,20 @@ fn unlearned_path_is_a_clear_failure() {
 }
 
 #[test]
+fn unlearned_path_within_an_env_step_budget_names_the_budget() {
+    let s = Scenario::builtin("paper_simple").unwrap();
+    let mut o = PlanOptions::from_scenario(&s);
+    o.train.max_env_steps = 5;
+    let r = plan(&s, &o, None, None).unwrap();
+    assert!(!r.success);
+    let why = r.failure.unwrap();
+    assert!(
+        why.contains("does not reach the target after its budget of 5 env steps"),
+        "{why}"
+    );
+}
+
+#[test]
 fn generator_guarantees_hold_over_many_seeds() {
     let opts = GeneratorOptions::default();
     for seed in 0..40 {
