@@ -18,7 +18,7 @@ import socket
 import time
 from typing import Any, ClassVar
 
-from sixaxis_avoid.benchmark.jax_learners import DQN_DEFAULTS, PPO_DEFAULTS
+from sixaxis_avoid.benchmark.jax_values import DQN_DEFAULTS, PPO_DEFAULTS
 from sixaxis_avoid.benchmark.learners import Learner, RunContext, same_world
 
 SEED_FREE = ("seed",)
