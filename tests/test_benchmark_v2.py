@@ -313,6 +313,30 @@ def test_v2_report_on_synthetic_runs(tmp_path):
     assert (tmp_path / "figures" / "bench-v2" / "bench_v2_profiles.png").stat().st_size > 0
 
 
+def test_v2_headline_sits_where_every_ranked_learner_ran(tmp_path):
+    """A learner missing from the largest budget (a study still running) does not drop out
+    of the ranking: the headline moves to the largest budget every ranked learner ran, and
+    the page names what was not run."""
+    from sixaxis_avoid.benchmark.report_v2 import write_report_v2
+
+    suite_path, out = write_synthetic_study(tmp_path)
+    for f in (out / "runs").glob("*__beta__*__b100000.json"):
+        f.unlink()
+    md = tmp_path / "BENCHMARKS.md"
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["common_budgets"] == [1000, 10000]
+    assert a["missing_budgets"] == {"beta": [100000]}
+    # alpha is best at 10k; the plateau check has no budget after it among those both ran.
+    assert a["best"] == ["alpha"] and a["headline"]["budget"] == 10000
+    assert not a["headline"]["plateaued"]
+    text = md.read_text()
+    assert "## Headline (10k env steps)" in text
+    assert "the largest budget at which every ranked learner ran, 10k" in text
+    assert "Not run yet: beta at 100k." in text
+    head = text.split("<!-- benchmark-headline:begin -->")[1].split("<!-- benchmark-head")[0]
+    assert "| alpha |" in head and "| beta |" in head
+
+
 def test_v2_report_before_any_run_says_so(tmp_path):
     from sixaxis_avoid.benchmark.__main__ import main
 

@@ -167,9 +167,18 @@ def analyse_v2(
                 over.append({"learner": lr, "budget": b, "runs": n_over, "of": len(used),
                              "max_env_steps": max(used)})  # fmt: skip
     means = {b: per_budget[b]["learners"] for b in budgets}
-    last = budgets[-1]
+    # A ranking compares learners at one budget, so the headline sits at a budget where
+    # every ranked learner ran on every task: the plateau is looked for among those.
+    common = [b for b in budgets if all(lr in per_budget[b]["complete"] for lr in ranked)]
+    missing = {
+        lr: [b for b in a["axis"] if b not in per_budget or lr not in per_budget[b]["complete"]]
+        for lr in ranked
+    }
+    missing = {lr: bs for lr, bs in missing.items() if bs}
+    scope = common or budgets
+    last = scope[-1]
     best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
-    head = stats.headline_budget(means, best) if best else None
+    head = stats.headline_budget({b: means[b] for b in scope}, best) if best else None
     a.update(
         {
             "learners": learners,
@@ -181,6 +190,8 @@ def analyse_v2(
             "per_budget": per_budget,
             "best": best,
             "headline": head,
+            "common_budgets": common,
+            "missing_budgets": missing,
             "over_budget": over,
         }
     )
@@ -457,12 +468,33 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                 "are not a ranking."
             )
         else:
-            L.append(
-                "**The plateau is not shown**: at no budget of the axis did every best learner "
-                f"({', '.join(head['best']) if head else 'none'}) stay within its interval at "
-                f"the next budget, so the headline sits at the largest budget, "
-                f"{fmt_steps(b)}, and its figures are lower bounds."
+            where = (
+                "the largest budget"
+                if not a["missing_budgets"] or not a["common_budgets"]
+                else "the largest budget at which every ranked learner ran"
             )
+            L.append(
+                "**The plateau is not shown**: at no budget "
+                + ("of the axis" if where == "the largest budget" else "that every ranked "
+                   "learner ran")
+                + f" did every best learner ({', '.join(head['best']) if head else 'none'}) "
+                f"stay within its interval at the next budget, so the headline sits at {where}, "
+                f"{fmt_steps(b)}, and its figures are lower bounds."
+            )  # fmt: skip
+        if a["missing_budgets"]:
+            L += [
+                "",
+                "**Not every learner ran at every budget of the axis**, so a learner's row at "
+                "a budget it did not run is empty and the ranking stops at the budgets all of "
+                "them ran ("
+                + (", ".join(fmt_steps(x) for x in a["common_budgets"]) or "none")
+                + "). Not run yet: "
+                + "; ".join(
+                    f"{lr} at {', '.join(fmt_steps(x) for x in bs)}"
+                    for lr, bs in a["missing_budgets"].items()
+                )
+                + ". Their commands are under *How to run*.",
+            ]
         L += [
             "",
             f"<!-- {HEADLINE_SECTION}:begin -->",
