@@ -70,6 +70,7 @@ def test_quick_suite_every_run_has_a_sane_result(local, specs, suite):
             assert res["score"] > 0 and res["convergence"]["env_steps"] <= res["env_steps"]
         if spec["family"] == "deep":
             assert res["env_steps"] >= spec["budget"]
+            assert res["vec_env"] == "SixAxisVecEnv"  # the SB3 learners' native VecEnv
         if spec["task"]["kind"] == "goal":
             assert "algorithm2" not in res and len(res["paths"]) == spec["task"]["eval_targets"]
         else:

@@ -14,6 +14,7 @@ from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark.algorithm2 import algorithm2
 from sixaxis_avoid.benchmark.learners import LearnerError, spl
 from sixaxis_avoid.benchmark.longer import fmt_ci
+from sixaxis_avoid.benchmark.runner import task_of
 from sixaxis_avoid.benchmark.tasks import SuiteError
 
 
@@ -153,6 +154,55 @@ def test_deep_learner_is_deterministic_per_seed():
     suite = load_suite("quick")
     spec = plan_runs(suite, ["dqn"], seeds=[1], tasks=[suite.task("paper_simple")])[0]
     assert execute_run(spec)["result"] == execute_run(spec)["result"]
+
+
+@pytest.mark.parametrize(
+    "learner, task_id",
+    [("ppo", "paper_simple"), ("dqn", "paper_simple"), ("dqn", "goal-paper_simple")],
+)
+def test_sb3_learners_train_on_the_native_vec_env_as_on_dummy_vec_env(learner, task_id):
+    """The SB3 learners train on the native SixAxisVecEnv (the run file says so), and
+    training on it is the same as on the DummyVecEnv of ctx.make_env envs they used before:
+    the same network weights, curve (greedy paths at the checkpoints), step and episode
+    counts and first success."""
+    import torch
+    from sixaxis_avoid.benchmark.learners import RunContext
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    class DummyContext(RunContext):
+        def make_vec_env(self, n_envs, **kw):
+            return DummyVecEnv([lambda: self.make_env(**kw)] * n_envs)
+
+    suite = load_suite("quick")
+    spec = plan_runs(suite, [learner], seeds=[1], tasks=[suite.task(task_id)], budget_scale=3)[0]
+    trained = {}
+    for cls in (RunContext, DummyContext):
+        model = resolve(learner)(spec["hyperparams"])
+        ctx = cls(task_of(spec), 1, spec["budget"], model.hyperparams, spec["checkpoints"], model)
+        model.learn(ctx)
+        ctx.finish()
+        trained[model.vec_env] = (model, ctx)
+    (native, c1), (dummy, c2) = trained["SixAxisVecEnv"], trained["DummyVecEnv"]
+    assert c1.env_steps == c2.env_steps >= spec["budget"] and c1.episodes == c2.episodes > 0
+    first = [
+        c.first_success and {k: c.first_success[k] for k in ("env_steps", "episode")}
+        for c in (c1, c2)
+    ]
+    assert first[0] == first[1]
+    untimed = [
+        [{k: p[k] for k in ("env_steps", "score", "paths")} for p in c.points] for c in (c1, c2)
+    ]
+    assert untimed[0] == untimed[1] and len(untimed[0]) >= 3
+    weights = native.model.policy.state_dict()
+    assert weights.keys() == dummy.model.policy.state_dict().keys()
+    for name, w in dummy.model.policy.state_dict().items():
+        assert torch.equal(weights[name], w), name
+    # Training changed the weights (the comparison above is not of two fresh networks).
+    fresh = resolve(learner)(spec["hyperparams"])
+    ctx = RunContext(task_of(spec), 1, 0, fresh.hyperparams, [], fresh)
+    fresh.learn(ctx)
+    assert any(not torch.equal(weights[k], w) for k, w in fresh.model.policy.state_dict().items())
+    assert execute_run(spec)["result"]["vec_env"] == "SixAxisVecEnv"
 
 
 # -- Algorithm 2 through the core ---------------------------------------------------------------

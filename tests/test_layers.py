@@ -50,6 +50,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.cli",
     "sixaxis_avoid.benchmark.tasks",
     "sixaxis_avoid.benchmark.algorithm2",
+    "sixaxis_avoid.benchmark.vec_env",
     "sixaxis_avoid.benchmark.learners",
     "sixaxis_avoid.benchmark.runner",
     # The JAX learners build on the learners and the runner's records; the runner reaches

@@ -223,3 +223,79 @@ def test_arm_aware_id(paper_simple):
         assert_obs_equal(o1, o2)
         np.testing.assert_array_equal(r1, r2)
         assert_infos_equal(i1, i2)
+
+
+def along_path(venv, rng: np.random.Generator, path) -> np.ndarray:
+    """Mostly the next move of ``path`` (the BFS optimum from the start) where an env is on
+    it, else :func:`toward_target`'s action: fixed-target episodes end at the target too."""
+    actions = toward_target(venv, rng)
+    index = {tuple(c): k for k, c in enumerate(path)}
+    for i, cell in enumerate(venv.get_attr("cell")):
+        k = index.get(tuple(cell))
+        if k is not None and k + 1 < len(path) and rng.random() < 0.9:
+            step = np.subtract(path[k + 1], cell)
+            ax = int(np.flatnonzero(step)[0])
+            actions[i] = 2 * ax + (0 if step[ax] > 0 else 1)
+    return actions
+
+
+@pytest.mark.parametrize(
+    "suite_name, task_id, replan",
+    [
+        ("v2", "paper_simple", False),  # a fixed target
+        ("v2", "goal-paper_simple", False),  # random targets, goal observations
+        ("v2", "paper_simple-50mm", False),  # a re-gridded world (cell_mm)
+        ("v2", "replan_clutter", True),  # an Algorithm 2 re-plan round's world
+        ("v1", "gen-hard-0", False),  # suite v1's larger generated grid
+    ],
+)
+def test_benchmark_envs_step_for_step_equal_to_dummy_vec_env(suite_name, task_id, replan):
+    """The SB3 learners' native VecEnv (RunContext.make_vec_env) against the DummyVecEnv of
+    RunContext.make_env envs they trained on before, on each kind of benchmark task: the
+    same observations, rewards, dones and infos, and the same step counts, episodes and
+    first success recorded for the run."""
+    from sixaxis_avoid.benchmark import load_suite
+    from sixaxis_avoid.benchmark.learners import RunContext
+
+    task = load_suite(suite_name).task(task_id)
+    world = task.scenario
+    if replan:  # the world of a re-plan round: the task's scenario and one more obstacle
+        path = sixaxis_avoid.shortest_path(world)
+        world = world.replace(obstacles=[*map(list, world.obstacles), list(path[len(path) // 2])])
+    path = sixaxis_avoid.shortest_path(world)
+    kw = {"reward_scale": 1e-4, "assist": True, "max_episode_steps": 2 * len(path)}
+    n, seed = 4, 11
+
+    def ctx():
+        return RunContext(task, seed, 10**6, {}, [], None, world if replan else None)
+
+    c1, c2 = ctx(), ctx()
+    ours = c1.make_vec_env(n, **kw)
+    theirs = DummyVecEnv([lambda: c2.make_env(**kw)] * n)
+    assert isinstance(ours.unwrapped, SixAxisVecEnv)
+    ours.seed(seed)
+    theirs.seed(seed)
+    assert ours.observation_space == theirs.observation_space
+    assert_obs_equal(ours.reset(), theirs.reset())
+    assert_infos_equal(ours.unwrapped.reset_infos, theirs.reset_infos)
+    rng = np.random.default_rng(5)
+    ended = {"terminated": 0, "truncated": 0}
+    for _ in range(400):
+        actions = toward_target(ours, rng) if task.is_goal else along_path(ours, rng, path)
+        o1, r1, d1, i1 = ours.step(actions)
+        o2, r2, d2, i2 = theirs.step(actions)
+        assert_obs_equal(o1, o2)
+        np.testing.assert_array_equal(r1, r2)
+        np.testing.assert_array_equal(d1, d2)
+        assert_infos_equal(i1, i2)
+        assert_infos_equal(ours.unwrapped.reset_infos, theirs.reset_infos)
+        for info in i1:
+            if "terminal_observation" in info:
+                ended["truncated" if info["TimeLimit.truncated"] else "terminated"] += 1
+    assert ended["truncated"] >= 10 and ended["terminated"] >= 1, ended
+    assert c1.env_steps == c2.env_steps == 400 * n
+    assert c1.episodes == c2.episodes == sum(ended.values())
+    assert c1.first_success is not None
+    assert {k: c1.first_success[k] for k in ("env_steps", "episode")} == {
+        k: c2.first_success[k] for k in ("env_steps", "episode")
+    }

@@ -106,11 +106,34 @@ class RunContext:
         given."""
         import sixaxis_avoid as sa
 
-        env_id = sa.ENV_ID
-        if self.task.is_goal:
-            env_id = sa.GOAL_ENV_ID
-            kwargs.setdefault("random_target", True)
+        env_id, kwargs = self._env_id(kwargs)
         return CountingEnv(sa.make(env_id, scenario=self.world, **kwargs), self)
+
+    def make_vec_env(self, n_envs: int, **kwargs: Any) -> Any:
+        """``n_envs`` of :meth:`make_env`'s envs (same id and keywords) as one
+        Stable-Baselines3 ``VecEnv``: the native ``sixaxis_avoid.sb3.SixAxisVecEnv`` (one
+        Rust call per batched step), counting steps as ``make_env``'s envs do, env 0 first
+        (:mod:`sixaxis_avoid.benchmark.vec_env`). Step for step the same as ``DummyVecEnv``
+        over ``make_env`` envs; needs the ``sb3`` extra. SB3 seeds it (env ``i`` with
+        ``seed + i``) when the algorithm is built."""
+        from sixaxis_avoid.benchmark.vec_env import CountingVecEnv
+        from sixaxis_avoid.sb3 import SixAxisVecEnv
+
+        env_id, kwargs = self._env_id(kwargs)
+        # sixaxis_avoid.make's default step cap, the scenario's (SixAxisVecEnv's is the same).
+        kwargs.setdefault("max_episode_steps", self.world.max_steps_per_episode)
+        venv = SixAxisVecEnv(int(n_envs), env_id=env_id, scenario=self.world, **kwargs)
+        return CountingVecEnv(venv, self)
+
+    def _env_id(self, kwargs: dict[str, Any]) -> tuple[str, dict[str, Any]]:
+        """The env id of the task and the keywords (goal tasks: random targets unless given)."""
+        import sixaxis_avoid as sa
+
+        kwargs = dict(kwargs)
+        if self.task.is_goal:
+            kwargs.setdefault("random_target", True)
+            return sa.GOAL_ENV_ID, kwargs
+        return sa.ENV_ID, kwargs
 
     def on_step(self, reached: bool, done: bool) -> None:
         self.env_steps += 1
@@ -580,7 +603,9 @@ def linear_schedule(initial: float) -> Callable[[float], float]:
 
 class SB3Learner(Learner):
     """A Stable-Baselines3-style algorithm on ``SixAxisAvoid-v0`` (vector observations; goal
-    observations on goal tasks, with hindsight experience replay for off-policy ones)."""
+    observations on goal tasks, with hindsight experience replay for off-policy ones),
+    trained on ``n_envs`` envs of the native ``SixAxisVecEnv`` (:meth:`RunContext.make_vec_env`;
+    its class name is the run file's ``result.vec_env``)."""
 
     family = "deep"
     off_policy: ClassVar[bool] = False
@@ -594,7 +619,6 @@ class SB3Learner(Learner):
     def learn(self, ctx: RunContext) -> None:
         import torch
         from stable_baselines3.common.logger import Logger
-        from stable_baselines3.common.vec_env import DummyVecEnv
 
         torch.set_num_threads(1)
         hp = dict(self.hyperparams)
@@ -602,7 +626,11 @@ class SB3Learner(Learner):
         n_envs = int(env_kw.pop("n_envs", 1))
         self._env_kw = {k: env_kw[k] for k in ("reward_scale", "assist") if k in env_kw}
         self._goal = ctx.task.is_goal
-        vec = DummyVecEnv([lambda: ctx.make_env(**env_kw)] * n_envs)
+        # The native SB3 VecEnv over the Rust batch, for every kind of task (fixed and random
+        # targets, goal observations, re-gridded and re-plan worlds): step for step the same
+        # as DummyVecEnv over ctx.make_env() envs (docs/BENCHMARKS.md, "Tasks").
+        vec = ctx.make_vec_env(n_envs, **env_kw)
+        self.vec_env = type(vec.unwrapped).__name__
         policy_kwargs = {k: hp.pop(k) for k in ("net_arch", "n_quantiles") if k in hp}
         schedule = hp.pop("lr_schedule", "constant")
         if schedule == "linear":

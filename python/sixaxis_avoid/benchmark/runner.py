@@ -291,6 +291,8 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
     }
     if hasattr(learner, "converged_episode"):
         result["core_converged_episode"] = learner.converged_episode
+    if hasattr(learner, "vec_env"):  # the SB3 learners' VecEnv class (SixAxisVecEnv)
+        result["vec_env"] = learner.vec_env
     if not task.is_goal:
         path = paths[0]
         result["algorithm1"] = algorithm1_record(task.scenario, path)
