@@ -29,7 +29,7 @@ _ENV_ONLY = ("num_envs", "copy", "render_mode")
 
 def check_joint_keywords(**keywords: Any) -> dict[str, Any]:
     """Joint-env keywords checked against the core's one table (JOINT_ENV_OPTIONS,
-    rust/core/src/joint_env/mod.rs) and returned as plain values: a bad value raises
+    rust/core/src/joint_env/options.rs) and returned as plain values: a bad value raises
     InvalidArgumentError naming the keyword and the value; an unknown keyword a TypeError."""
     return _core.check_options("joint", **keywords)
 

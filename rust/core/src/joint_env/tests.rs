@@ -1,4 +1,5 @@
 use super::*;
+use crate::options::{Domain, OptionValue, Options};
 use std::sync::Arc;
 
 use rand::{Rng, SeedableRng};
