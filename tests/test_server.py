@@ -318,6 +318,21 @@ def test_cli_serve_prints_its_address_and_drains_on_sigterm(tmp_path):
         [exe, "serve", "--address", "0.0.0.0:0"], capture_output=True, text=True, timeout=30
     )
     assert bad.returncode == 2 and "`address` = 0.0.0.0:0" in bad.stderr
+    for flag in ("--keepalive-interval", "--keepalive-timeout", "--idle-timeout"):
+        bad = subprocess.run([exe, "serve", flag, "0"], capture_output=True, text=True, timeout=30)
+        assert bad.returncode == 2 and f"`{flag}` = 0: must be a number of seconds" in bad.stderr
+
+
+def test_the_duration_options_are_checked_naming_them():
+    for name in ("keepalive_interval", "keepalive_timeout", "idle_timeout"):
+        for bad in (0, -1.0, float("nan"), float("inf")):
+            with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=rf"`{name}` = "):
+                sixaxis_avoid.serve(**{name: bad})
+    with sixaxis_avoid.serve(keepalive_interval=0.5, keepalive_timeout=2.5) as s:
+        channel, conn = connect(s.address)
+        with channel, conn:
+            create(conn)
+            assert s.worlds == 1
 
 
 # The Rust client of the extension (sixaxis_avoid.remote's default transport) ---------------

@@ -136,6 +136,22 @@ def _transport_of(transport: Any, credentials: Any) -> str:
     return transport
 
 
+def _last_attempt(channel: Any) -> str:
+    """gRPC's account of why a channel never became ready (nothing listening, a TLS
+    handshake refused, a socket closed by a server that wants TLS), "" when it gives none:
+    a call that does not wait for the channel fails at once with it."""
+    probe = channel.unary_unary(
+        "/grpc.health.v1.Health/Check",
+        request_serializer=lambda b: b,
+        response_deserializer=lambda b: b,
+    )
+    try:
+        probe(b"", timeout=0.5)
+    except grpc.RpcError as e:
+        return e.details() if hasattr(e, "details") else ""
+    return ""
+
+
 class _Spec:
     """One tensor spec of a world: ``name``, ``dtype`` (the protocol's DataType number) and
     ``shape``, whichever transport read it."""
@@ -267,9 +283,11 @@ class _GrpcSession(_BaseSession):
         try:
             grpc.channel_ready_future(self._channel).result(timeout=connect_timeout)
         except grpc.FutureTimeoutError:
+            why = _last_attempt(self._channel)
             self._channel.close()
             raise TimeoutError(
                 f"no env server answered at {address} within connect_timeout={connect_timeout} s"
+                + (f" (the last attempt: {why})" if why else "")
             ) from None
         metadata = [("authorization", f"Bearer {token}")] if token is not None else None
         self._requests: queue.SimpleQueue = queue.SimpleQueue()

@@ -47,6 +47,12 @@ pub struct Limits {
     pub max_message_bytes: usize,
     /// A stream with no request for this long is closed (its worlds freed).
     pub idle_timeout: Duration,
+    /// How often the server sends an HTTP/2 keepalive ping on a connection that sent it
+    /// nothing for this long.
+    pub keepalive_interval: Duration,
+    /// How long a ping may go unanswered before the connection is closed (its streams
+    /// ended, their worlds freed).
+    pub keepalive_timeout: Duration,
 }
 
 impl Default for Limits {
@@ -58,6 +64,8 @@ impl Default for Limits {
             max_total_envs: 1 << 21,
             max_message_bytes: 64 << 20,
             idle_timeout: Duration::from_secs(600),
+            keepalive_interval: Duration::from_secs(30),
+            keepalive_timeout: Duration::from_secs(20),
         }
     }
 }
