@@ -172,6 +172,14 @@ def test_hostile_requests_get_a_status_and_the_stream_goes_on(server):
             conn.send(pb.StepRequest(actions={1: pack(np.array([0, 1, 6, 0], dtype=np.int32))}))
         assert "`action` = 6 at index 2" in e.value.message
         assert step(conn, [0, 1, 2, 3])[0] == 1  # still serving this stream
+        for mask in (np.ones(3, dtype=bool), np.ones(4, dtype=np.int32), "all"):
+            with pytest.raises(error.DmEnvRpcError) as e:
+                conn.send(pb.ResetRequest(settings={"reset_mask": pack(mask)}))
+            assert e.value.code == INVALID_ARGUMENT and "`reset_mask`" in e.value.message
+        with pytest.raises(error.DmEnvRpcError) as e:
+            conn.send(pb.ResetRequest(settings={"lanes": pack(np.int32(1))}))
+        assert "the settings are seed, reset_mask" in e.value.message
+        assert step(conn, [0, 1, 2, 3])[0] == 1  # not reset by the refused masks
         # A flood of CreateWorld: past --max-worlds-per-session every one is refused.
         extra = [create(conn) for _ in range(3)]
         for _ in range(20):

@@ -27,7 +27,7 @@ use crate::failure::Failure;
 use crate::proto::environment::{Request as Req, Response as Resp};
 use crate::proto::rpc::environment_server::Environment;
 use crate::proto::*;
-use crate::world::{gone, reset_seed, World, WorldSettings};
+use crate::world::{gone, reset_settings, ResetSettings, World, WorldSettings};
 
 /// Worlds of at least this many lanes are stepped on the blocking pool.
 pub const BLOCKING_LANES: usize = 256;
@@ -245,21 +245,18 @@ impl Session {
             Req::JoinWorld(r) => self.join_world(r),
             Req::Step(r) => self.step(r).await,
             Req::Reset(r) => {
-                let seed = reset_seed(&r.settings)?;
+                let reset = reset_settings(&r.settings)?;
                 let slot = self.joined()?;
                 let specs = slot.run(|w| {
-                    w.restart(seed);
+                    w.restart(&reset)?;
                     Ok(w.specs().clone())
                 })?;
                 Ok(Resp::Reset(ResetResponse { specs: Some(specs) }))
             }
             Req::ResetWorld(r) => {
-                let seed = reset_seed(&r.settings)?;
+                let reset = reset_settings(&r.settings)?;
                 let slot = self.shared.slot(&r.world_name)?;
-                slot.run(|w| {
-                    w.restart(seed);
-                    Ok(())
-                })?;
+                slot.run(|w| w.restart(&reset))?;
                 Ok(Resp::ResetWorld(ResetWorldResponse {}))
             }
             Req::LeaveWorld(_) => {
@@ -400,7 +397,7 @@ impl Session {
             *j = Some(self.id);
         }
         let specs = slot.run(|w| {
-            w.restart(None);
+            w.restart(&ResetSettings::default())?;
             Ok(w.specs().clone())
         });
         let specs = match specs {
