@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import importlib
 import os
+import shutil
 import signal
+import subprocess
 import sys
+import textwrap
 import threading
 import time
 from concurrent import futures
@@ -129,6 +132,16 @@ def test_observation_spaces_equal_the_in_process_ones(server, paper_simple):
 
 
 # Parity -------------------------------------------------------------------------------------
+def wait_for(cond, timeout: float = 15.0) -> bool:
+    """Whether ``cond()`` holds within ``timeout`` seconds."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if cond():
+            return True
+        time.sleep(0.05)
+    return cond()
+
+
 def _assert_same(a, b):
     if isinstance(b, dict):
         assert set(a) == set(b)
@@ -209,12 +222,18 @@ def test_goal_vector_env_matches_native(server, near_target, transport):
                 _assert_same(x, y)
 
 
-def test_one_lane_worlds_and_reset_mask_match_native(server, near_target, transport):
+@pytest.mark.parametrize("lanes_per_world", [1, None])
+def test_reset_mask_matches_native(server, near_target, transport, lanes_per_world):
+    """`reset(options={"reset_mask": mask})` on one-lane worlds (each reset or not) and on
+    one world of four lanes (a Reset with the `reset_mask` setting; docs/SERVER.md
+    "Episodes"): the native vector env's trajectories."""
     n, kw = 4, {"scenario": near_target, "random_target": True}
     native = SixAxisAvoidVectorEnv(n, **kw)
     rng = np.random.default_rng(3)
-    with RemoteVectorEnv(server, n, lanes_per_world=1, transport=transport, **kw) as remote:
-        assert len(remote._worlds) == n
+    with RemoteVectorEnv(
+        server, n, lanes_per_world=lanes_per_world, transport=transport, **kw
+    ) as remote:
+        assert len(remote._worlds) == (n if lanes_per_world == 1 else 1)
         _assert_same(remote.reset(seed=0)[0], native.reset(seed=0)[0])
         for k in range(50):
             a = rng.integers(0, 6, size=n)
@@ -251,13 +270,6 @@ def test_vector_env_gymnasium_contract(server, near_target):
             envs.step(np.zeros(2, dtype=int))
         with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="seed"):
             envs.reset(seed=[1, 5, 9])
-
-
-def test_partial_reset_of_a_multi_lane_world_says_what_to_do(server, transport):
-    with RemoteVectorEnv(server, 3, transport=transport) as envs:
-        envs.reset(seed=0)
-        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="lanes_per_world=1"):
-            envs.reset(options={"reset_mask": np.array([True, False, False])})
 
 
 # Errors, timeouts, a dropped server, closing ------------------------------------------------
@@ -470,6 +482,173 @@ def test_a_unix_socket_over_both_transports(tmp_path, near_target, transport):
                     local.reset(seed=5)
 
 
+# TLS -----------------------------------------------------------------------------------------
+def _self_signed(directory: Path, name: str) -> tuple[Path, Path]:
+    """A self-signed certificate for ``localhost`` and ``127.0.0.1`` and its key, made now
+    by the ``openssl`` command (on every CI image; no Python package needed)."""
+    cert, key = directory / f"{name}.crt", directory / f"{name}.key"
+    subprocess.run(
+        [
+            shutil.which("openssl") or "/usr/bin/openssl",
+            "req",
+            "-x509",
+            "-newkey",
+            "ec",
+            "-pkeyopt",
+            "ec_paramgen_curve:prime256v1",
+            "-nodes",
+            "-keyout",
+            str(key),
+            "-out",
+            str(cert),
+            "-days",
+            "2",
+            "-subj",
+            "/CN=localhost",
+            "-addext",
+            "subjectAltName=DNS:localhost,IP:127.0.0.1",
+        ],
+        check=True,
+        capture_output=True,
+        timeout=60,
+    )
+    return cert, key
+
+
+@pytest.fixture(scope="module")
+def tls_files(tmp_path_factory):
+    """The server's certificate and key, and another certificate (a CA that did not sign
+    the server's)."""
+    d = tmp_path_factory.mktemp("tls")
+    cert, key = _self_signed(d, "server")
+    other, _ = _self_signed(d, "other")
+    return cert, key, other
+
+
+@pytest.fixture(scope="module")
+def tls_server(tls_files):
+    cert, key, _ = tls_files
+    with sixaxis_avoid.serve(tls_cert=cert, tls_key=key) as s:
+        yield s
+
+
+def test_tls_trajectories_equal_the_in_process_env(tls_server, tls_files, near_target):
+    """`credentials=` selects grpcio over TLS (docs/SERVER.md "The Rust transport"); reset and
+    steps give the in-process env's trajectory, across episodes."""
+    import grpc
+
+    credentials = grpc.ssl_channel_credentials(root_certificates=tls_files[0].read_bytes())
+    local = sixaxis_avoid.make("SixAxisAvoid-v0", near_target, random_target=True)
+    rng = np.random.default_rng(2)
+    ends = 0
+    with RemoteEnv(
+        tls_server, scenario=near_target, random_target=True, credentials=credentials
+    ) as env:
+        assert env._session.transport == "grpc"
+        for seed in (6, None):
+            _assert_same(env.reset(seed=seed)[0], local.reset(seed=seed)[0])
+            for _ in range(40):
+                a = int(rng.integers(0, 6))
+                r, lo = env.step(a), local.step(a)
+                _assert_same(r[0], lo[0])
+                assert r[1:] == lo[1:]
+                if r[2] or r[3]:
+                    ends += 1
+                    break
+        assert tls_server.worlds == 1
+    assert ends == 2
+    assert wait_for(lambda: tls_server.worlds == 0)
+
+
+def test_a_plaintext_client_of_a_tls_server_fails_within_its_timeout(tls_server, transport):
+    """No hang: grpcio never gets a ready channel (TimeoutError at connect_timeout, with
+    gRPC's account of the last attempt); the Rust client's HTTP/2 handshake is answered with
+    TLS bytes (ConnectionError at once)."""
+    t0 = time.monotonic()
+    with pytest.raises((TimeoutError, ConnectionError)) as e:
+        RemoteEnv(tls_server, transport=transport, connect_timeout=1.0, timeout=5.0)
+    assert time.monotonic() - t0 < 5
+    assert tls_server.address in str(e.value)
+    if transport == "grpc":
+        assert e.type is TimeoutError and "connect_timeout=1.0" in str(e.value)
+    assert wait_for(lambda: tls_server.sessions == 0)
+
+
+def test_a_client_trusting_another_ca_is_refused(tls_server, tls_files):
+    """A certificate the client's roots did not sign: the TLS handshake fails, the error says
+    so (gRPC's words: CERTIFICATE_VERIFY_FAILED) within connect_timeout."""
+    import grpc
+
+    credentials = grpc.ssl_channel_credentials(root_certificates=tls_files[2].read_bytes())
+    t0 = time.monotonic()
+    with pytest.raises(TimeoutError, match=r"(?i)connect_timeout=1\.0 s.*certificate"):
+        RemoteEnv(tls_server, credentials=credentials, connect_timeout=1.0)
+    assert time.monotonic() - t0 < 5
+    assert tls_server.worlds == 0
+
+
+def test_tls_alone_may_bind_a_non_loopback_address(tls_files):
+    """The rule of docs/SERVER.md "Security": off loopback only with a token or TLS (the
+    refusal without either is tested through the CLI in tests/test_server.py)."""
+    cert, key, _ = tls_files
+    with sixaxis_avoid.serve("0.0.0.0:0", tls_cert=cert, tls_key=key) as s:
+        assert s.running and s.port > 0
+
+
+# Keepalive -----------------------------------------------------------------------------------
+def test_the_rust_client_answers_keepalive_pings_while_idle():
+    """The Rust client's keeper thread drives its connection while the client is idle
+    (docs/SERVER.md "The Rust transport"). With a ping after 1 s of silence and 1 s to
+    answer it, a client idle for 4 s keeps its stream and world, while a client process
+    frozen (SIGSTOP) for those 4 s, which answers no ping, loses both: its next step is a
+    ConnectionError."""
+    frozen_client = textwrap.dedent(
+        """
+        import sys
+        from sixaxis_avoid.remote import RemoteEnv
+
+        env = RemoteEnv(sys.argv[1], transport="rust")
+        env.reset(seed=0)
+        print("ready", flush=True)
+        sys.stdin.readline()
+        try:
+            env.step(0)
+            print("stepped", flush=True)
+        except ConnectionError as e:
+            print("ConnectionError", e, flush=True)
+        """
+    )
+    with sixaxis_avoid.serve(keepalive_interval=1.0, keepalive_timeout=1.0) as s:
+        with RemoteEnv(s, transport="rust") as env:
+            env.reset(seed=0)
+            env.step(4)
+            proc = subprocess.Popen(
+                [sys.executable, "-c", frozen_client, s.address],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                text=True,
+            )
+            try:
+                assert proc.stdout is not None and proc.stdin is not None
+                assert proc.stdout.readline().strip() == "ready"
+                assert s.worlds == 2
+                os.kill(proc.pid, signal.SIGSTOP)
+                _wait_stopped(proc.pid)
+                time.sleep(4.0)
+                assert s.worlds == 1 and s.sessions == 1  # the frozen client's are gone
+                os.kill(proc.pid, signal.SIGCONT)
+                proc.stdin.write("\n")
+                proc.stdin.flush()
+                assert proc.stdout.readline().startswith("ConnectionError")
+                assert proc.wait(30) == 0
+            finally:
+                if proc.poll() is None:
+                    proc.kill()
+                    proc.wait()
+            env.step(4)  # the idle client's world is still there
+            env.reset(seed=1)
+
+
 def test_the_rust_client_releases_the_gil_while_it_waits():
     """A Python thread counts while the main thread waits 1 s in the Rust client for a
     server that never answers: it counts as fast as it does alone, so the wait held no
@@ -581,22 +760,16 @@ def test_worlds_are_freed_on_close_and_when_an_env_is_dropped(transport):
     without close() ends its stream, and the server frees the world."""
     import gc
 
-    def wait_for(server, n):
-        deadline = time.monotonic() + 10
-        while server.worlds != n and time.monotonic() < deadline:
-            time.sleep(0.05)
-        return server.worlds
-
     with sixaxis_avoid.serve() as s:
         env = RemoteEnv(s, transport=transport)
         envs = RemoteVectorEnv([s, s], 4, transport=transport)
-        assert wait_for(s, 3) == 3
+        assert wait_for(lambda: s.worlds == 3, 10), s.worlds
         envs.close()
-        assert wait_for(s, 1) == 1
+        assert wait_for(lambda: s.worlds == 1, 10), s.worlds
         env.reset(seed=0)
         del env
         gc.collect()
-        assert wait_for(s, 0) == 0
+        assert wait_for(lambda: s.worlds == 0, 10), s.worlds
 
 
 def test_start_ray_servers_checks_its_arguments():

@@ -172,6 +172,14 @@ def test_hostile_requests_get_a_status_and_the_stream_goes_on(server):
             conn.send(pb.StepRequest(actions={1: pack(np.array([0, 1, 6, 0], dtype=np.int32))}))
         assert "`action` = 6 at index 2" in e.value.message
         assert step(conn, [0, 1, 2, 3])[0] == 1  # still serving this stream
+        for mask in (np.ones(3, dtype=bool), np.ones(4, dtype=np.int32), "all"):
+            with pytest.raises(error.DmEnvRpcError) as e:
+                conn.send(pb.ResetRequest(settings={"reset_mask": pack(mask)}))
+            assert e.value.code == INVALID_ARGUMENT and "`reset_mask`" in e.value.message
+        with pytest.raises(error.DmEnvRpcError) as e:
+            conn.send(pb.ResetRequest(settings={"lanes": pack(np.int32(1))}))
+        assert "the settings are seed, reset_mask" in e.value.message
+        assert step(conn, [0, 1, 2, 3])[0] == 1  # not reset by the refused masks
         # A flood of CreateWorld: past --max-worlds-per-session every one is refused.
         extra = [create(conn) for _ in range(3)]
         for _ in range(20):
@@ -318,6 +326,21 @@ def test_cli_serve_prints_its_address_and_drains_on_sigterm(tmp_path):
         [exe, "serve", "--address", "0.0.0.0:0"], capture_output=True, text=True, timeout=30
     )
     assert bad.returncode == 2 and "`address` = 0.0.0.0:0" in bad.stderr
+    for flag in ("--keepalive-interval", "--keepalive-timeout", "--idle-timeout"):
+        bad = subprocess.run([exe, "serve", flag, "0"], capture_output=True, text=True, timeout=30)
+        assert bad.returncode == 2 and f"`{flag}` = 0: must be a number of seconds" in bad.stderr
+
+
+def test_the_duration_options_are_checked_naming_them():
+    for name in ("keepalive_interval", "keepalive_timeout", "idle_timeout"):
+        for bad in (0, -1.0, float("nan"), float("inf")):
+            with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=rf"`{name}` = "):
+                sixaxis_avoid.serve(**{name: bad})
+    with sixaxis_avoid.serve(keepalive_interval=0.5, keepalive_timeout=2.5) as s:
+        channel, conn = connect(s.address)
+        with channel, conn:
+            create(conn)
+            assert s.worlds == 1
 
 
 # The Rust client of the extension (sixaxis_avoid.remote's default transport) ---------------

@@ -642,4 +642,6 @@ def serve(
     max_total_envs: int | None = None,
     max_message_bytes: int | None = None,
     idle_timeout: float | None = None,
+    keepalive_interval: float | None = None,
+    keepalive_timeout: float | None = None,
 ) -> Server: ...

@@ -25,6 +25,44 @@ from sixaxis_avoid.env import (
 )
 
 
+# The vector envs' argument checks, shared with the remote vector env
+# (sixaxis_avoid.remote.vector): the same errors in the same words in process and over a server.
+def reset_mask_of(options: dict[str, Any] | None, num_envs: int) -> np.ndarray | None:
+    """``options["reset_mask"]`` of ``reset(options=...)`` checked: a bool array of shape
+    ``(num_envs,)``, or None when not given."""
+    if not options or "reset_mask" not in options:
+        return None
+    mask = np.asarray(options["reset_mask"])
+    if mask.dtype != np.bool_ or mask.shape != (num_envs,):
+        raise invalid(
+            "options['reset_mask']",
+            options["reset_mask"],
+            f"must be a bool array of shape ({num_envs},)",
+        )
+    return mask
+
+
+def seed_list_of(seed: Any, num_envs: int) -> list[Any]:
+    """A ``reset(seed=[...])`` list checked: one seed (or None) per env."""
+    seeds = list(seed)
+    if len(seeds) != num_envs:
+        raise invalid("seed", seed, f"a list of seeds must have one per env ({num_envs})")
+    return seeds
+
+
+def discrete_actions_of(actions: Any, num_envs: int) -> np.ndarray:
+    """The discrete actions of a step checked: integers, one per env, as an array of shape
+    ``(num_envs,)`` of their own integer dtype (the range 0..6 is the core's check)."""
+    a = np.asarray(actions)
+    if a.dtype.kind not in "iu":
+        raise invalid("actions", actions, "must be integers in 0..6")
+    if a.shape != (num_envs,):
+        a = a.reshape(-1) if a.size == num_envs else a
+        if a.shape != (num_envs,):
+            raise invalid("actions", actions, f"must have shape ({num_envs},)")
+    return a
+
+
 class NativeVectorEnv(VectorEnv):
     """What the package's native vector envs share: a Rust batch (``self._core``) that steps
     all envs in one call into NumPy buffers it owns, Gymnasium 1.x next-step autoreset, the
@@ -74,16 +112,7 @@ class NativeVectorEnv(VectorEnv):
     ):
         super().reset(seed=seed if isinstance(seed, (int, np.integer)) else None)
         self._seed(seed)
-        mask = None
-        if options and "reset_mask" in options:
-            mask = np.asarray(options["reset_mask"])
-            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
-                raise invalid(
-                    "options['reset_mask']",
-                    options["reset_mask"],
-                    f"must be a bool array of shape ({self.num_envs},)",
-                )
-        self._core.reset(mask)
+        self._core.reset(reset_mask_of(options, self.num_envs))
         return self._observations(), self._info()
 
     def step(self, actions):
@@ -214,9 +243,7 @@ class SixAxisAvoidVectorEnv(NativeVectorEnv):
         elif isinstance(seed, (int, np.integer)):
             seeds = [int(seed) + i for i in range(n)]
         else:
-            seeds = list(seed)
-            if len(seeds) != n:
-                raise invalid("seed", seed, f"a list of seeds must have one per env ({n})")
+            seeds = seed_list_of(seed, n)
         # Env i's generator is seeded exactly as a single env's reset(seed=seeds[i]) does.
         self._core.seed([int(seeding.np_random(s)[0].integers(0, 2**63)) for s in seeds])
         self._seeded = True
@@ -241,16 +268,7 @@ class SixAxisAvoidVectorEnv(NativeVectorEnv):
 
     def actions_array(self, actions) -> np.ndarray:
         """``actions`` as the int64 array of shape ``(num_envs,)`` the core steps with."""
-        a = np.asarray(actions)
-        if a.dtype != np.int64:
-            if a.dtype.kind not in "iu":
-                raise invalid("actions", actions, "must be integers in 0..6")
-            a = a.astype(np.int64)
-        if a.shape != (self.num_envs,):
-            a = a.reshape(-1) if a.size == self.num_envs else a
-            if a.shape != (self.num_envs,):
-                raise invalid("actions", actions, f"must have shape ({self.num_envs},)")
-        return a
+        return discrete_actions_of(actions, self.num_envs).astype(np.int64, copy=False)
 
     # Configuration ----------------------------------------------------------------------
     @property

@@ -136,6 +136,22 @@ def _transport_of(transport: Any, credentials: Any) -> str:
     return transport
 
 
+def _last_attempt(channel: Any) -> str:
+    """gRPC's account of why a channel never became ready (nothing listening, a TLS
+    handshake refused, a socket closed by a server that wants TLS), "" when it gives none:
+    a call that does not wait for the channel fails at once with it."""
+    probe = channel.unary_unary(
+        "/grpc.health.v1.Health/Check",
+        request_serializer=lambda b: b,
+        response_deserializer=lambda b: b,
+    )
+    try:
+        probe(b"", timeout=0.5)
+    except grpc.RpcError as e:
+        return e.details() if hasattr(e, "details") else ""
+    return ""
+
+
 class _Spec:
     """One tensor spec of a world: ``name``, ``dtype`` (the protocol's DataType number) and
     ``shape``, whichever transport read it."""
@@ -192,7 +208,45 @@ def _Session(
     )
 
 
-class _GrpcSession:
+class _BaseSession:
+    """What both transports' sessions hold: the server's ``address``, the answer
+    ``timeout``, the world (``world_name``, ``joined``) and the answers awaited in order
+    (``_pending``); the round trip :meth:`call`, and :meth:`close` (LeaveWorld and
+    DestroyWorld while the stream works, then the transport's :meth:`_shutdown`).
+
+    A subclass gives ``send``, ``receive``, ``failed``, ``_leave_world``,
+    ``_destroy_world`` and ``_shutdown``."""
+
+    transport: str
+
+    def __init__(self, address: str, timeout: float):
+        self.address = address
+        self.timeout = timeout
+        self.world_name: str | None = None
+        self.joined = False
+        self._pending: deque[Any] = deque()
+
+    def call(self, request: Any, what: str) -> Any:
+        self.send(request, what)
+        return self.receive()
+
+    def close(self) -> None:
+        """LeaveWorld and DestroyWorld (when the stream still works), then close the stream."""
+        if not self.failed and self.world_name is not None:
+            try:
+                while self._pending:
+                    self.receive()
+                if self.joined:
+                    self._leave_world()
+                    self.joined = False
+                self._destroy_world(self.world_name)
+            except (ConnectionError, TimeoutError, ServerError, PermissionError):
+                pass
+            self.world_name = None
+        self._shutdown()
+
+
+class _GrpcSession(_BaseSession):
     """One gRPC stream (grpcio) to one server, joined to one world it created.
 
     Requests are written without waiting (:meth:`send`) and answers read in order
@@ -213,15 +267,11 @@ class _GrpcSession:
         timeout: float,
         connect_timeout: float,
     ):
-        self.address = address
-        self.timeout = timeout
+        super().__init__(address, timeout)
         self._deadline: float | None = None
         self._expired = False
         self._down = False
         self._failure: BaseException | None = None
-        self._pending: deque[tuple[str, str]] = deque()
-        self.world_name: str | None = None
-        self.joined = False
         options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
         if address.startswith("unix:"):
             # The socket path is no valid :authority for the server (docs/SERVER.md).
@@ -233,9 +283,11 @@ class _GrpcSession:
         try:
             grpc.channel_ready_future(self._channel).result(timeout=connect_timeout)
         except grpc.FutureTimeoutError:
+            why = _last_attempt(self._channel)
             self._channel.close()
             raise TimeoutError(
                 f"no env server answered at {address} within connect_timeout={connect_timeout} s"
+                + (f" (the last attempt: {why})" if why else "")
             ) from None
         metadata = [("authorization", f"Bearer {token}")] if token is not None else None
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
@@ -293,10 +345,6 @@ class _GrpcSession:
             return message_utils.unpack_environment_response(response, field)
         except error.DmEnvRpcError as e:
             raise self._status_error(e.code, e.message, what) from None
-
-    def call(self, request: Any, what: str) -> Any:
-        self.send(request, what)
-        return self.receive()
 
     def send_reset(self, settings: dict[str, Any]) -> None:
         """Write a Reset with ``settings`` (``seed``, ``reset_mask``: Python values)."""
@@ -369,26 +417,15 @@ class _GrpcSession:
     def failed(self) -> bool:
         return self._failure is not None
 
-    def close(self) -> None:
-        """LeaveWorld and DestroyWorld (when the stream still works), then close the stream."""
-        if self._failure is None and self.world_name is not None:
-            try:
-                while self._pending:
-                    self.receive()
-                if self.joined:
-                    self.call(dm_env_rpc_pb2.LeaveWorldRequest(), "LeaveWorld")
-                    self.joined = False
-                self.call(
-                    dm_env_rpc_pb2.DestroyWorldRequest(world_name=self.world_name), "DestroyWorld"
-                )
-            except (ConnectionError, TimeoutError, ServerError, PermissionError):
-                pass
-            self.world_name = None
-        if self._failure is None:
-            self._failure = ConnectionError(f"the session with {self.address} is closed")
-        self._shutdown()
+    def _leave_world(self) -> None:
+        self.call(dm_env_rpc_pb2.LeaveWorldRequest(), "LeaveWorld")
+
+    def _destroy_world(self, name: str) -> None:
+        self.call(dm_env_rpc_pb2.DestroyWorldRequest(world_name=name), "DestroyWorld")
 
     def _shutdown(self) -> None:
+        if self._failure is None:
+            self._failure = ConnectionError(f"the session with {self.address} is closed")
         if self._down:
             return
         self._down = True
@@ -419,7 +456,7 @@ _PAYLOAD_DTYPES = {
 }
 
 
-class _RustSession:
+class _RustSession(_BaseSession):
     """One stream to one server over the extension's Rust client
     (:class:`sixaxis_avoid._core.DmEnvClient`), joined to one world it created.
 
@@ -442,13 +479,10 @@ class _RustSession:
         timeout: float,
         connect_timeout: float,
     ):
-        self.address = address
-        self.timeout = timeout
-        self.world_name: str | None = None
-        self.joined = False
+        # _pending: the protobuf field and name of each answer awaited (None: decoded by
+        # the client).
+        super().__init__(address, timeout)
         self._closed = False
-        # The protobuf field and name of each answer awaited (None: decoded by the client).
-        self._pending: deque[tuple[str, str] | None] = deque()
         self._client = _core.DmEnvClient(
             address, token=token, timeout=timeout, connect_timeout=connect_timeout
         )
@@ -482,10 +516,6 @@ class _RustSession:
         except error.DmEnvRpcError as e:
             raise _status_error(self.address, e.code, e.message, what) from None
 
-    def call(self, request: Any, what: str) -> Any:
-        self.send(request, what)
-        return self.receive()
-
     def send_reset(self, settings: dict[str, Any]) -> None:
         """Write a Reset with ``settings`` (``seed``, ``reset_mask``: Python values)."""
         self._client.send_reset(settings)
@@ -518,24 +548,16 @@ class _RustSession:
         return self._client.failed
 
     def close(self) -> None:
-        """LeaveWorld and DestroyWorld (when the stream still works), then close the stream."""
-        c = getattr(self, "_client", None)
-        if c is None:
-            return
-        if not c.failed and self.world_name is not None:
-            try:
-                while self._pending:
-                    self.receive()
-                if self.joined:
-                    c.send_leave_world()
-                    c.receive()
-                    self.joined = False
-                c.send_destroy_world(self.world_name)
-                c.receive()
-            except (ConnectionError, TimeoutError, ServerError, PermissionError):
-                pass
-            self.world_name = None
-        self._shutdown()
+        if getattr(self, "_client", None) is not None:
+            super().close()
+
+    def _leave_world(self) -> None:
+        self._client.send_leave_world()
+        self._client.receive()
+
+    def _destroy_world(self, name: str) -> None:
+        self._client.send_destroy_world(name)
+        self._client.receive()
 
     def _shutdown(self) -> None:
         if not self._closed:
@@ -616,7 +638,7 @@ class _World:
     """A world of ``n`` lanes on one session: its uids, the Step request and the decoding of
     an answer into arrays of ``n`` rows."""
 
-    def __init__(self, session: _GrpcSession | _RustSession, lanes: slice, obs_type: str):
+    def __init__(self, session: _BaseSession, lanes: slice, obs_type: str):
         self.session = session
         self.lanes = lanes
         self.n = lanes.stop - lanes.start

@@ -26,6 +26,7 @@ from sixaxis_avoid.remote._session import (
     _space_of,
     _World,
 )
+from sixaxis_avoid.vector import discrete_actions_of, reset_mask_of, seed_list_of
 
 
 def _split(num_envs: int, parts: int) -> list[slice]:
@@ -178,9 +179,7 @@ class RemoteVectorEnv(VectorEnv):
             return [base + w.lanes.start for w in self._worlds]
         if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
             return [int(seed) + w.lanes.start for w in self._worlds]
-        seeds = list(seed)
-        if len(seeds) != n:
-            raise invalid("seed", seed, f"a list of seeds must have one per env ({n})")
+        seeds = seed_list_of(seed, n)
         out: list[int | None] = []
         for w in self._worlds:
             run = seeds[w.lanes]
@@ -203,15 +202,7 @@ class RemoteVectorEnv(VectorEnv):
     def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed if isinstance(seed, (int, np.integer)) else None)
         self._check_open()
-        mask = None
-        if options and "reset_mask" in options:
-            mask = np.asarray(options["reset_mask"])
-            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
-                raise invalid(
-                    "options['reset_mask']",
-                    options["reset_mask"],
-                    f"must be a bool array of shape ({self.num_envs},)",
-                )
+        mask = reset_mask_of(options, self.num_envs)
         seeds = self._world_seeds(seed) if mask is None else [None] * len(self._worlds)
         self._seeded = True
         sent = []
@@ -257,13 +248,8 @@ class RemoteVectorEnv(VectorEnv):
 
     def actions_array(self, actions) -> np.ndarray:
         """``actions`` as the int32 array of shape ``(num_envs,)`` sent to the servers."""
-        a = np.asarray(actions)
-        if a.dtype.kind not in "iu":
-            raise invalid("actions", actions, "must be integers in 0..6")
-        if a.shape != (self.num_envs,):
-            a = a.reshape(-1) if a.size == self.num_envs else a
-            if a.shape != (self.num_envs,):
-                raise invalid("actions", actions, f"must have shape ({self.num_envs},)")
+        a = discrete_actions_of(actions, self.num_envs)
+        # Checked here too, so a bad action fails before any server is written to.
         if a.size and (a.min() < 0 or a.max() > 5):
             raise invalid("actions", actions, "must be integers in 0..6")
         return a.astype(np.int32, copy=False)

@@ -6,12 +6,11 @@
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::time::Duration;
 
 use clap::Args;
 use serde_json::json;
 use sixaxis_core::{Error, Result};
-use sixaxis_server::{Limits, Listen, ServerConfig, TlsFiles};
+use sixaxis_server::{seconds, Limits, Listen, ServerConfig, TlsFiles};
 
 /// The flags of `sixaxis serve`.
 #[derive(Args, Debug, Clone)]
@@ -55,6 +54,12 @@ pub struct ServeArgs {
     /// Close a stream (freeing its worlds) after this many seconds without a request.
     #[arg(long, value_name = "SECONDS", default_value_t = Limits::default().idle_timeout.as_secs_f64())]
     idle_timeout: f64,
+    /// Send an HTTP/2 keepalive ping on a connection silent for this many seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = Limits::default().keepalive_interval.as_secs_f64())]
+    keepalive_interval: f64,
+    /// Close a connection (freeing its worlds) whose ping is unanswered for this many seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = Limits::default().keepalive_timeout.as_secs_f64())]
+    keepalive_timeout: f64,
 }
 
 fn read(path: &std::path::Path) -> Result<Vec<u8>> {
@@ -90,13 +95,6 @@ impl ServeArgs {
             }),
             _ => None,
         };
-        if !(self.idle_timeout.is_finite() && self.idle_timeout > 0.0 && self.idle_timeout < 1e9) {
-            return Err(Error::argument(
-                "--idle-timeout",
-                self.idle_timeout,
-                "must be a number of seconds > 0",
-            ));
-        }
         Ok(ServerConfig {
             listen,
             token,
@@ -107,7 +105,9 @@ impl ServeArgs {
                 max_envs_per_world: self.max_envs_per_world,
                 max_total_envs: self.max_total_envs,
                 max_message_bytes: self.max_message_bytes,
-                idle_timeout: Duration::from_secs_f64(self.idle_timeout),
+                idle_timeout: seconds("--idle-timeout", self.idle_timeout)?,
+                keepalive_interval: seconds("--keepalive-interval", self.keepalive_interval)?,
+                keepalive_timeout: seconds("--keepalive-timeout", self.keepalive_timeout)?,
             },
             ..ServerConfig::default()
         })

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use pyo3::prelude::*;
 use sixaxis_core::Error;
-use sixaxis_server::{BackgroundServer, Limits, Listen, ServerConfig, Stats, TlsFiles};
+use sixaxis_server::{seconds, BackgroundServer, Limits, Listen, ServerConfig, Stats, TlsFiles};
 
 use crate::errors::run;
 
@@ -34,6 +34,7 @@ fn read_file(path: &std::path::Path) -> sixaxis_core::Result<Vec<u8>> {
     address="127.0.0.1:0", *, uds=None, token=None, tls_cert=None, tls_key=None,
     max_sessions=None, max_worlds_per_session=None, max_envs_per_world=None,
     max_total_envs=None, max_message_bytes=None, idle_timeout=None,
+    keepalive_interval=None, keepalive_timeout=None,
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn serve(
@@ -49,6 +50,8 @@ pub fn serve(
     max_total_envs: Option<usize>,
     max_message_bytes: Option<usize>,
     idle_timeout: Option<f64>,
+    keepalive_interval: Option<f64>,
+    keepalive_timeout: Option<f64>,
 ) -> PyResult<PyServer> {
     let address = address.to_string();
     let server = run(py, move || {
@@ -77,16 +80,9 @@ pub fn serve(
             }
         };
         let d = Limits::default();
-        let idle = match idle_timeout {
-            None => d.idle_timeout,
-            Some(s) if s.is_finite() && s > 0.0 && s < 1e9 => Duration::from_secs_f64(s),
-            Some(s) => {
-                return Err(Error::argument(
-                    "idle_timeout",
-                    s,
-                    "must be a number of seconds > 0",
-                ))
-            }
+        let secs = |name: &str, v: Option<f64>, default: Duration| match v {
+            None => Ok(default),
+            Some(s) => seconds(name, s),
         };
         let config = ServerConfig {
             listen,
@@ -98,7 +94,17 @@ pub fn serve(
                 max_envs_per_world: max_envs_per_world.unwrap_or(d.max_envs_per_world),
                 max_total_envs: max_total_envs.unwrap_or(d.max_total_envs),
                 max_message_bytes: max_message_bytes.unwrap_or(d.max_message_bytes),
-                idle_timeout: idle,
+                idle_timeout: secs("idle_timeout", idle_timeout, d.idle_timeout)?,
+                keepalive_interval: secs(
+                    "keepalive_interval",
+                    keepalive_interval,
+                    d.keepalive_interval,
+                )?,
+                keepalive_timeout: secs(
+                    "keepalive_timeout",
+                    keepalive_timeout,
+                    d.keepalive_timeout,
+                )?,
             },
             ..ServerConfig::default()
         };

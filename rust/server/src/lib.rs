@@ -25,5 +25,7 @@ pub mod service;
 pub mod world;
 
 pub use failure::Failure;
-pub use server::{bind, BackgroundServer, BoundServer, Listen, ServerConfig, Stats, TlsFiles};
+pub use server::{
+    bind, seconds, BackgroundServer, BoundServer, Listen, ServerConfig, Stats, TlsFiles,
+};
 pub use service::Limits;

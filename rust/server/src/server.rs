@@ -94,14 +94,30 @@ impl ServerConfig {
                 return Err(Error::argument(name, v, "must be at least 1"));
             }
         }
-        if l.idle_timeout.is_zero() {
-            return Err(Error::argument(
-                "idle_timeout",
-                0,
-                "must be more than 0 seconds",
-            ));
+        for (name, d) in [
+            ("idle_timeout", l.idle_timeout),
+            ("keepalive_interval", l.keepalive_interval),
+            ("keepalive_timeout", l.keepalive_timeout),
+        ] {
+            if d.is_zero() {
+                return Err(Error::argument(name, 0, "must be more than 0 seconds"));
+            }
         }
         Ok(())
+    }
+}
+
+/// A duration option given in seconds (`--idle-timeout`, `keepalive_interval=`, ...): a
+/// finite number > 0 and below 10^9, else an error naming `name` and the value.
+pub fn seconds(name: &str, value: f64) -> Result<Duration> {
+    if value.is_finite() && value > 0.0 && value < 1e9 {
+        Ok(Duration::from_secs_f64(value))
+    } else {
+        Err(Error::argument(
+            name,
+            value,
+            "must be a number of seconds > 0",
+        ))
     }
 }
 
@@ -213,8 +229,8 @@ impl BoundServer {
 
         let mut builder = Server::builder()
             .tcp_nodelay(true)
-            .http2_keepalive_interval(Some(Duration::from_secs(30)))
-            .http2_keepalive_timeout(Some(Duration::from_secs(20)));
+            .http2_keepalive_interval(Some(self.config.limits.keepalive_interval))
+            .http2_keepalive_timeout(Some(self.config.limits.keepalive_timeout));
         if let Some(tls) = &self.config.tls {
             let identity = Identity::from_pem(&tls.cert_pem, &tls.key_pem);
             builder = builder

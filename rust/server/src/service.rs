@@ -27,7 +27,7 @@ use crate::failure::Failure;
 use crate::proto::environment::{Request as Req, Response as Resp};
 use crate::proto::rpc::environment_server::Environment;
 use crate::proto::*;
-use crate::world::{gone, reset_seed, World, WorldSettings};
+use crate::world::{gone, reset_settings, ResetSettings, World, WorldSettings};
 
 /// Worlds of at least this many lanes are stepped on the blocking pool.
 pub const BLOCKING_LANES: usize = 256;
@@ -47,6 +47,12 @@ pub struct Limits {
     pub max_message_bytes: usize,
     /// A stream with no request for this long is closed (its worlds freed).
     pub idle_timeout: Duration,
+    /// How often the server sends an HTTP/2 keepalive ping on a connection that sent it
+    /// nothing for this long.
+    pub keepalive_interval: Duration,
+    /// How long a ping may go unanswered before the connection is closed (its streams
+    /// ended, their worlds freed).
+    pub keepalive_timeout: Duration,
 }
 
 impl Default for Limits {
@@ -58,6 +64,8 @@ impl Default for Limits {
             max_total_envs: 1 << 21,
             max_message_bytes: 64 << 20,
             idle_timeout: Duration::from_secs(600),
+            keepalive_interval: Duration::from_secs(30),
+            keepalive_timeout: Duration::from_secs(20),
         }
     }
 }
@@ -237,21 +245,18 @@ impl Session {
             Req::JoinWorld(r) => self.join_world(r),
             Req::Step(r) => self.step(r).await,
             Req::Reset(r) => {
-                let seed = reset_seed(&r.settings)?;
+                let reset = reset_settings(&r.settings)?;
                 let slot = self.joined()?;
                 let specs = slot.run(|w| {
-                    w.restart(seed);
+                    w.restart(&reset)?;
                     Ok(w.specs().clone())
                 })?;
                 Ok(Resp::Reset(ResetResponse { specs: Some(specs) }))
             }
             Req::ResetWorld(r) => {
-                let seed = reset_seed(&r.settings)?;
+                let reset = reset_settings(&r.settings)?;
                 let slot = self.shared.slot(&r.world_name)?;
-                slot.run(|w| {
-                    w.restart(seed);
-                    Ok(())
-                })?;
+                slot.run(|w| w.restart(&reset))?;
                 Ok(Resp::ResetWorld(ResetWorldResponse {}))
             }
             Req::LeaveWorld(_) => {
@@ -392,7 +397,7 @@ impl Session {
             *j = Some(self.id);
         }
         let specs = slot.run(|w| {
-            w.restart(None);
+            w.restart(&ResetSettings::default())?;
             Ok(w.specs().clone())
         });
         let specs = match specs {

@@ -14,7 +14,7 @@ use prost::Message;
 use sixaxis_server::proto::environment::Request as Req;
 use sixaxis_server::proto::tensor::{Int32Array, Int64Array, Payload, StringArray};
 use sixaxis_server::proto::*;
-use sixaxis_server::world::{reset_seed, World, WorldSettings};
+use sixaxis_server::world::{reset_settings, World, WorldSettings};
 
 #[derive(Default)]
 struct Counts {
@@ -93,8 +93,8 @@ fn handle(bytes: &[u8], world: &Mutex<World>, counts: &Counts) {
             Err(_) => false,
         },
         Some(Req::Step(s)) => w.step(&s).is_ok(),
-        Some(Req::Reset(r)) => reset_seed(&r.settings).map(|s| w.restart(s)).is_ok(),
-        Some(Req::ResetWorld(r)) => reset_seed(&r.settings).is_ok(),
+        Some(Req::Reset(r)) => reset_settings(&r.settings).is_ok_and(|s| w.restart(&s).is_ok()),
+        Some(Req::ResetWorld(r)) => reset_settings(&r.settings).is_ok(),
         Some(_) => true,
         None => false,
     };

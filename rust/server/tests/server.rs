@@ -167,3 +167,36 @@ async fn a_big_world_steps_off_the_reactor_and_a_drain_ends_streams() {
         Ok(other) => panic!("expected UNAVAILABLE, got {other:?}"),
     }
 }
+
+#[tokio::test]
+async fn keepalive_keeps_clients_that_answer_and_drops_those_that_do_not() {
+    // docs/SERVER.md "Limits": a ping after 1 s of silence, 1 s to answer it.
+    let s = start(Limits {
+        keepalive_interval: Duration::from_secs(1),
+        keepalive_timeout: Duration::from_secs(1),
+        ..Limits::default()
+    });
+    let mut c = Client::connect(s.address()).await;
+    let name = c.create(settings(&[("seed", int(1))])).await.unwrap();
+    c.join(&name).await.unwrap();
+    c.step(None, &[]).await.unwrap();
+    // Idle for 4 s with the client's runtime running: its connection answers the pings.
+    tokio::time::sleep(Duration::from_secs(4)).await;
+    c.step(Some(actions(&[4])), &[REWARD]).await.unwrap();
+    assert_eq!(s.stats().worlds(), 1);
+    // Idle for 4 s with the runtime blocked, so nobody reads the connection: the ping goes
+    // unanswered and the server closes the connection, freeing the world. (Were it kept,
+    // the world would stay: the idle timeout is 600 s.)
+    std::thread::sleep(Duration::from_secs(4));
+    assert!(wait_for(|| s.stats().worlds() == 0 && s.stats().sessions() == 0).await);
+    let sent =
+        c.tx.send(EnvironmentRequest {
+            payload: Some(environment::Request::Step(StepRequest::default())),
+        })
+        .await;
+    let answer = c.rx.message().await;
+    assert!(
+        sent.is_err() || !matches!(answer, Ok(Some(_))),
+        "{answer:?}"
+    );
+}

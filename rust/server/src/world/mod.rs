@@ -4,6 +4,8 @@
 //! - The first Step after JoinWorld, Reset or ResetWorld resets every lane (seeding them
 //!   first if a seed is pending) and returns the initial observations; its actions are
 //!   ignored (the protocol's rule). It is `reset(seed=...)` of `sixaxis_avoid.vector`.
+//!   A Reset with `reset_mask` restarts only the lanes of the mask at that Step; the others
+//!   are not stepped (`reset(options={"reset_mask": mask})`).
 //! - Every other Step is `step(actions)` of the vector env: Gymnasium 1.x next-step
 //!   autoreset, bit for bit (the same core code).
 //! - With `num_envs = 1` the tensors are scalars and the state follows dm_env: TERMINATED
@@ -44,6 +46,8 @@ pub struct World {
     specs: ActionObservationSpecs,
     /// The next Step resets the lanes instead of stepping them.
     needs_start: bool,
+    /// The lanes that reset restarts (None: all).
+    start_mask: Option<Vec<bool>>,
     /// The seed of that reset.
     pending_seed: Option<u64>,
     /// The lanes were seeded once (a reset without a seed then keeps their generators).
@@ -117,6 +121,7 @@ impl World {
             batch,
             obs_type: s.obs_type,
             needs_start: true,
+            start_mask: None,
             pending_seed: s.seed,
             seeded: false,
         })
@@ -231,13 +236,48 @@ impl World {
         self.batch.len()
     }
 
-    /// The next Step starts the episodes anew (JoinWorld, Reset, ResetWorld), seeded with
-    /// `seed` if given.
-    pub fn restart(&mut self, seed: Option<u64>) {
+    /// The next Step starts the episodes anew (JoinWorld, Reset, ResetWorld): every lane's,
+    /// or those of `reset.reset_mask` (together with the lanes of a restart still pending),
+    /// seeding every lane first with `reset.seed` if given. A mask that is no bool per lane
+    /// is an error naming `reset_mask`, and changes nothing.
+    pub fn restart(&mut self, reset: &ResetSettings) -> Result<(), Failure> {
+        let mask = match &reset.reset_mask {
+            None => None,
+            Some(t) => Some(self.reset_mask(t)?),
+        };
+        self.start_mask = match (mask, self.start_mask.take()) {
+            (Some(new), Some(mut old)) if self.needs_start => {
+                old.iter_mut().zip(new).for_each(|(o, n)| *o |= n);
+                Some(old)
+            }
+            // A whole restart still pending stays whole.
+            (Some(_), None) if self.needs_start => None,
+            (mask, _) => mask,
+        };
         self.needs_start = true;
-        if seed.is_some() {
-            self.pending_seed = seed;
+        if reset.seed.is_some() {
+            self.pending_seed = reset.seed;
         }
+        Ok(())
+    }
+
+    /// A `reset_mask` tensor's lanes: bools shaped as the lanes (`[N]`, a scalar for one
+    /// lane), the protocol's shape rules (a -1 dimension, one value for every lane).
+    fn reset_mask(&self, t: &Tensor) -> Result<Vec<bool>, Failure> {
+        let n = self.batch.len();
+        let Some(Payload::Bools(b)) = &t.payload else {
+            return Err(Failure::argument(
+                "reset_mask",
+                "a tensor of another dtype",
+                "must be a bool tensor, one value per lane",
+            ));
+        };
+        check_shape("reset_mask", &t.shape, &self.lead(None), b.array.len())?;
+        Ok(if b.array.len() == 1 {
+            vec![b.array[0]; n]
+        } else {
+            b.array.clone()
+        })
     }
 
     /// One Step request (see the module docs).
@@ -271,7 +311,8 @@ impl World {
                 self.batch.seed(&seeds)?;
                 self.seeded = true;
             }
-            self.batch.reset(None, self.buf.buffers())?;
+            let mask = self.start_mask.take();
+            self.batch.reset(mask.as_deref(), self.buf.buffers())?;
             self.needs_start = false;
             EnvironmentStateType::Running
         } else {
@@ -314,8 +355,7 @@ impl World {
             ));
         };
         let values = int_values(t)?;
-        let want: Vec<i32> = if n == 1 { vec![] } else { vec![n as i32] };
-        check_shape(&t.shape, &want, values.len())?;
+        check_shape("action", &t.shape, &self.lead(None), values.len())?;
         let actions: Vec<i64> = if values.len() == 1 {
             vec![values[0]; n]
         } else {
@@ -475,10 +515,10 @@ fn int_values(t: &Tensor) -> Result<Vec<i64>, Failure> {
 /// A tensor's shape against the spec's (`want`), with the protocol's rules: the same rank,
 /// at most one dimension -1 (inferred from the payload), and a payload of one value is
 /// broadcast to the shape.
-fn check_shape(shape: &[i32], want: &[i32], len: usize) -> Result<(), Failure> {
+fn check_shape(name: &str, shape: &[i32], want: &[i32], len: usize) -> Result<(), Failure> {
     let bad = |why: &str| {
         Failure::argument(
-            "action",
+            name,
             format!("a tensor of shape {shape:?} with {len} values"),
             format!("{why} (the spec's shape is {want:?})"),
         )

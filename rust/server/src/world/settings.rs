@@ -159,16 +159,28 @@ pub fn setting_value(key: &str, t: &Tensor) -> Result<OptionValue, Failure> {
 /// The domain of the `seed` setting (as Gymnasium's: a whole number >= 0).
 const SEED: Domain = Domain::u64_from(0);
 
-/// The `seed` setting of a Reset or ResetWorld (the only one they take).
-pub fn reset_seed(settings: &Settings) -> Result<Option<u64>, Failure> {
-    let mut seed = None;
+/// The settings of a Reset or ResetWorld (docs/SERVER.md "Episodes").
+#[derive(Debug, Clone, Default)]
+pub struct ResetSettings {
+    /// `seed`: seeds every lane at the next Step.
+    pub seed: Option<u64>,
+    /// `reset_mask`: the lanes the next Step restarts (a bool per lane; absent: all),
+    /// checked against the world's lanes by [`World::restart`].
+    pub reset_mask: Option<Tensor>,
+}
+
+/// The settings of a Reset or ResetWorld: `seed` and `reset_mask`; any other is an error
+/// naming it.
+pub fn reset_settings(settings: &Settings) -> Result<ResetSettings, Failure> {
+    let mut out = ResetSettings::default();
     for (key, t) in settings {
-        if key != "seed" {
-            return Err(unknown_setting(key, t, &["seed"]));
+        match key.as_str() {
+            "seed" => out.seed = Some(checked_seed(&setting_value(key, t)?)?),
+            "reset_mask" => out.reset_mask = Some(t.clone()),
+            _ => return Err(unknown_setting(key, t, &["seed", "reset_mask"])),
         }
-        seed = Some(checked_seed(&setting_value(key, t)?)?);
     }
-    Ok(seed)
+    Ok(out)
 }
 
 fn checked_seed(v: &OptionValue) -> Result<u64, Failure> {
