@@ -693,12 +693,17 @@ def test_the_rust_client_releases_the_gil_while_it_waits():
 
 
 # Stable-Baselines3 ----------------------------------------------------------------------------
-def test_sb3_vecenv_matches_the_native_one(server, near_target):
+@pytest.mark.parametrize("lanes_per_world", [1, None])
+def test_sb3_vecenv_matches_the_native_one(server, near_target, lanes_per_world):
+    """Step for step SixAxisVecEnv's, with a world per lane (the default) or one world of
+    three lanes whose ended lanes are reset by a Reset with ``reset_mask``."""
     from sixaxis_avoid.remote import RemoteSB3VecEnv
     from sixaxis_avoid.sb3 import SixAxisVecEnv
 
     kw = {"scenario": near_target, "random_target": True, "max_episode_steps": 8}
-    ours, theirs = RemoteSB3VecEnv(server, 3, seed=4, **kw), SixAxisVecEnv(3, seed=4, **kw)
+    ours = RemoteSB3VecEnv(server, 3, seed=4, lanes_per_world=lanes_per_world, **kw)
+    theirs = SixAxisVecEnv(3, seed=4, **kw)
+    assert len(ours.venv._worlds) == (3 if lanes_per_world == 1 else 1)
     np.testing.assert_array_equal(ours.reset(), theirs.reset())
     dones = 0
     for a in np.random.default_rng(2).integers(0, 6, size=(60, 3)):

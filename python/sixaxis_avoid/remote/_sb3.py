@@ -25,9 +25,10 @@ def _remote_sb3_vec_env() -> type:
         with a :class:`RemoteVectorEnv` in place of the native vector env.
 
         ``RemoteSB3VecEnv(addresses, n_envs, seed=None, token=None, **env_kwargs)``; the
-        keywords are :class:`RemoteVectorEnv`'s; ``lanes_per_world`` defaults to 1 here, as
-        SB3 resets each lane when its episode ends and a server resets whole worlds
-        (docs/SERVER.md "Episodes"); all the worlds are stepped at once.
+        keywords are :class:`RemoteVectorEnv`'s; ``lanes_per_world`` defaults to 1 here (a
+        world per lane, all stepped at once); ``lanes_per_world=None`` makes one world per
+        server, whose ended lanes are reset by a Reset with ``reset_mask`` (docs/SERVER.md
+        "Episodes"): SB3 resets each lane as soon as its episode ends.
         """
 
         def __init__(

@@ -233,8 +233,8 @@ class RemoteVectorEnv(VectorEnv):
 
     @staticmethod
     def _reset_lanes(w: _World, lanes: np.ndarray) -> None:
-        """Reset some lanes of a multi-lane world (a Reset with ``reset_mask``, for a server
-        that takes it)."""
+        """Reset some lanes of a multi-lane world: a Reset with ``reset_mask`` (docs/SERVER.md
+        "Episodes"; a server that resets only whole worlds refuses it)."""
         try:
             w.session.send_reset({"reset_mask": lanes})
             w.session.receive()
