@@ -25,18 +25,17 @@ def _remote_sb3_vec_env() -> type:
         with a :class:`RemoteVectorEnv` in place of the native vector env.
 
         ``RemoteSB3VecEnv(addresses, n_envs, seed=None, token=None, **env_kwargs)``; the
-        keywords are :class:`RemoteVectorEnv`'s; ``lanes_per_world`` defaults to 1 here (a
-        world per lane, all stepped at once); ``lanes_per_world=None`` makes one world per
-        server, whose ended lanes are reset by a Reset with ``reset_mask`` (docs/SERVER.md
-        "Episodes"): SB3 resets each lane as soon as its episode ends.
+        keywords are :class:`RemoteVectorEnv`'s. SB3 resets each lane as soon as its
+        episode ends: with the default ``lanes_per_world=None`` (one world per server) the
+        ended lanes are reset by a Reset with ``reset_mask`` (docs/SERVER.md "Episodes");
+        ``lanes_per_world=1`` makes a world per lane, all stepped at once (slower: one
+        stream per lane).
         """
 
         def __init__(
             self, address_or_addresses: Any, n_envs: int, seed: int | None = None, **kwargs: Any
         ):
             self.env_id = "remote"
-            # SB3 resets a lane as soon as its episode ends: one world per lane.
-            kwargs.setdefault("lanes_per_world", 1)
             self.venv = RemoteVectorEnv(address_or_addresses, n_envs, copy=False, **kwargs)
             v = self.venv
             self.render_mode = None
