@@ -635,6 +635,15 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         "",
         *tasks_rows(suite),
         "",
+        "The Stable-Baselines3 learners train on the native `sixaxis_avoid.sb3.SixAxisVecEnv` "
+        "(all of a run's envs stepped in one Rust call) on every kind of task above: fixed "
+        "targets, the goal task's random targets and goal observations, re-gridded worlds, "
+        "and the worlds of Algorithm 2's re-plan rounds. It is step for step the same as the "
+        "`DummyVecEnv` of single envs that suite v1's runs used, and a run gives the same "
+        "result on either (tests/test_sb3_vecenv.py, tests/test_benchmark_units.py), so no "
+        "task keeps the old path; an SB3 run file names its VecEnv (`result.vec_env`). "
+        "Training speed on each: docs/PERFORMANCE.md, *JAX learners*.",
+        "",
         *STATISTICS,
         "## How to run",
         "",
