@@ -181,6 +181,48 @@ def test_bad_keywords_and_actions_name_the_keyword_and_value():
         venv.step(bad)
 
 
+def test_options_joint_lists_every_keyword_with_the_envs_default():
+    """``options("joint")`` is the one declaration: every keyword the model reads is a row
+    whose default is the model's actual default, the envs' own keywords have their
+    signature defaults, the registrations' step cap is the declared one, and a bad value of
+    any row is an error naming the keyword and the value."""
+    import inspect
+    import re
+
+    from sixaxis_avoid.joint import SixAxisAvoidJointVectorEnv, check_joint_keywords
+
+    rows = {o["key"]: o for o in sixaxis_avoid.options("joint")}
+    model = _core.JointEnvCore().options  # built without keywords: the model's defaults
+    env_only = {"num_envs", "copy", "render_mode"}
+    assert set(rows) == set(model) | env_only
+    for key, value in model.items():
+        assert rows[key]["default"] == value, key
+        assert type(rows[key]["default"]) is type(value), key
+    assert model["max_joint_step_deg"] == 2.0 and model["max_episode_steps"] == 500
+    params = inspect.signature(SixAxisAvoidJointVectorEnv.__init__).parameters
+    for key in env_only:
+        assert rows[key]["default"] == params[key].default, key
+    for env_id in IDS:
+        assert gym.spec(env_id).max_episode_steps == rows["max_episode_steps"]["default"]
+    # Every row is a keyword the envs accept; passing each default changes nothing.
+    given = {k: o["default"] for k, o in rows.items() if k not in env_only}
+    env = gym.make(sixaxis_avoid.JOINT_ENV_ID, **given)
+    assert env.unwrapped._core.options == model
+    venv = gym.make_vec(sixaxis_avoid.JOINT_ENV_ID, num_envs=2, **given)
+    assert venv.unwrapped._core.options == model
+    for key, o in rows.items():
+        bad: object = {"bool": "yes", "choice": "nope"}.get(o["kind"], int(o.get("min", 0)) - 1)
+        want = rf"`{key}` = {re.escape(repr(bad))}"
+        with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=want):
+            check_joint_keywords(**{key: bad})
+        if key == "max_episode_steps":  # gym.make gives it to Gymnasium's TimeLimit
+            with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=want):
+                gym.make_vec(sixaxis_avoid.JOINT_ENV_ID, num_envs=2, **{key: bad})
+        elif key not in env_only:
+            with pytest.raises(sixaxis_avoid.InvalidArgumentError, match=want):
+                gym.make(sixaxis_avoid.JOINT_ENV_ID, **{key: bad})
+
+
 def test_goal_compute_reward_is_the_steps_reward():
     env = gym.make(sixaxis_avoid.JOINT_GOAL_ENV_ID)
     env.reset(seed=0)

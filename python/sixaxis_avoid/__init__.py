@@ -64,8 +64,11 @@ from sixaxis_avoid._ids import (
 MAX_EPISODE_STEPS = Scenario().max_steps_per_episode
 
 
-#: Step cap of the joint-space registrations (the core's default ``max_episode_steps``).
-JOINT_MAX_EPISODE_STEPS = 500
+#: Step cap of the joint-space registrations (the core's default ``max_episode_steps``,
+#: from its one table of the joint env's keywords).
+JOINT_MAX_EPISODE_STEPS: int = next(
+    o["default"] for o in options("joint") if o["key"] == "max_episode_steps"
+)
 
 #: The registrations: id -> (env class, native vector env class, default keywords, step cap).
 _REGISTRATIONS = {

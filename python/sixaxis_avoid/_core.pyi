@@ -238,7 +238,7 @@ def train(
 ) -> TrainResult: ...
 def check_options(function: Literal["env", "joint"], **kwargs: Any) -> dict[str, Any]: ...
 def options(
-    function: Literal["train", "plan", "generate_scenario", "env"] = "train",
+    function: Literal["train", "plan", "generate_scenario", "env", "joint"] = "train",
     scenario: _ScenarioLike = None,
 ) -> list[dict[str, Any]]: ...
 def load_q(
@@ -408,6 +408,7 @@ class JointEnvCore:
     beta0_rad: list[float]
     joint_limits_rad: list[tuple[float, float]]
     max_episode_steps: int
+    options: dict[str, Any]
     max_joint_step_deg: float
     target_tolerance_mm: float
     scenario: Scenario
@@ -448,6 +449,7 @@ class JointVecEnvCore:
     beta0_rad: list[float]
     joint_limits_rad: list[tuple[float, float]]
     max_episode_steps: int
+    options: dict[str, Any]
     max_joint_step_deg: float
     target_tolerance_mm: float
     num_envs: int

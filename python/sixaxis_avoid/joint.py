@@ -20,8 +20,12 @@ from sixaxis_avoid._ids import JOINT_ENV_ID, JOINT_GOAL_ENV_ID
 from sixaxis_avoid.env import as_scenario
 from sixaxis_avoid.vector import NativeVectorEnv
 
+#: Each joint-env keyword's default, from the core's one table (``_core.options("joint")``,
+#: JOINT_ENV_OPTIONS; None where the scenario's value or Gymnasium's applies).
+JOINT_DEFAULTS: dict[str, Any] = {o["key"]: o["default"] for o in _core.options("joint")}
+
 #: Step cap of the registrations (the core's default ``max_episode_steps``).
-JOINT_MAX_EPISODE_STEPS = 500  # the same number as sixaxis_avoid.JOINT_MAX_EPISODE_STEPS
+JOINT_MAX_EPISODE_STEPS: int = JOINT_DEFAULTS["max_episode_steps"]
 
 #: Keywords of the Python envs that the model does not take.
 _ENV_ONLY = ("num_envs", "copy", "render_mode")

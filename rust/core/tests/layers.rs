@@ -23,14 +23,17 @@ fn graph() -> BTreeMap<String, BTreeSet<String>> {
             vec![]
         };
         if !files.is_empty() {
+            // Non-test code of each file (up to its first `#[cfg(test)]`), comments left
+            // out below.
             let text: String = files
                 .iter()
                 .filter(|p| !p.ends_with("tests.rs"))
-                .map(|p| std::fs::read_to_string(p).unwrap())
+                .map(|p| {
+                    let t = std::fs::read_to_string(p).unwrap();
+                    t.split("#[cfg(test)]").next().unwrap().to_string()
+                })
                 .collect::<Vec<_>>()
                 .join("\n");
-            // Non-test code, comments left out.
-            let text = text.split("#[cfg(test)]").next().unwrap().to_string();
             let lines: Vec<&str> = text
                 .lines()
                 .filter(|l| !l.trim_start().starts_with("//"))

@@ -14,6 +14,7 @@ use pyo3::types::PyDict;
 use sixaxis_core::joint_env::{
     JointBatch, JointBuffers, JointEpisode, JointModel, JointOptions, JOINT_ENV_OPTIONS,
 };
+use sixaxis_core::options::OptionInfo;
 use sixaxis_core::Scenario;
 
 use crate::convert::repr;
@@ -26,7 +27,8 @@ fn build_model(
     kwargs: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Arc<Scenario>, Arc<JointModel>)> {
     let s = scenario_from_any(py, scenario)?;
-    let values = crate::request::options_of(py, "JointEnvCore", &JOINT_ENV_OPTIONS, kwargs)?;
+    let infos: Vec<OptionInfo> = JOINT_ENV_OPTIONS.iter().map(|o| o.info).collect();
+    let values = crate::request::options_of(py, "JointEnvCore", &infos, kwargs)?;
     let model = run_attached(py, || {
         JointModel::new(&s, JointOptions::from_options(&values)?)
     })?;
@@ -249,6 +251,23 @@ macro_rules! joint_pymethods {
                     $model
                 };
                 m.options().max_episode_steps
+            }
+            /// The model's keywords and their values (``None``: left to the scenario), the
+            /// keys of ``options("joint")`` that configure the model.
+            #[getter]
+            fn options<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+                let m: &JointModel = {
+                    let $s = self;
+                    $model
+                };
+                let d = PyDict::new(py);
+                for (key, v) in m.options().values() {
+                    match v {
+                        Some(v) => d.set_item(key, crate::request::value_to_py(py, &v)?)?,
+                        None => d.set_item(key, py.None())?,
+                    }
+                }
+                Ok(d)
             }
             /// The largest joint increment of a step, degrees.
             #[getter]

@@ -170,7 +170,7 @@ pub fn int_in(
         .transpose()
 }
 
-fn value_to_py<'py>(py: Python<'py>, v: &OptionValue) -> PyResult<Bound<'py, PyAny>> {
+pub fn value_to_py<'py>(py: Python<'py>, v: &OptionValue) -> PyResult<Bound<'py, PyAny>> {
     Ok(match v {
         OptionValue::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
         OptionValue::Int(i) => i.into_pyobject(py)?.into_any(),
@@ -181,7 +181,8 @@ fn value_to_py<'py>(py: Python<'py>, v: &OptionValue) -> PyResult<Bound<'py, PyA
 
 /// The options of :func:`train` (``"train"``), :func:`plan` (``"plan"``) or
 /// :func:`generate_scenario` (``"generate_scenario"``; defaults its own) or of the
-/// Gymnasium envs (``"env"``: their keywords, ``default`` None where None is the default) as a list of
+/// grid Gymnasium envs (``"env"``) or of the joint-space envs (``"joint"``; their keywords,
+/// ``default`` None where None is the default) as a list of
 /// dicts, one per keyword, in the order they apply: ``key``, ``field`` (the scenario field
 /// it overrides, or ``""``), ``kind`` (``int``, ``int|auto``, ``float``, ``bool``,
 /// ``choice``), ``min``/``max`` (numbers), ``choices`` (names), ``unit``, ``doc`` and
@@ -205,6 +206,13 @@ pub fn options<'py>(
                 .filter_map(|o| o.default.value().map(|v| (o.key, v)))
                 .collect(),
         ),
+        "joint" => (
+            JOINT_ENV_OPTIONS.iter().map(|o| o.info).collect(),
+            JOINT_ENV_OPTIONS
+                .iter()
+                .filter_map(|o| o.default.value().map(|v| (o.key, v)))
+                .collect(),
+        ),
         "train" => (train_options(), option_values(&s)),
         "plan" => (plan_options(), option_values(&s)),
         "generate_scenario" => (
@@ -219,7 +227,7 @@ pub fn options<'py>(
                 py,
                 "function",
                 other,
-                "must be \"train\", \"plan\", \"generate_scenario\" or \"env\"",
+                "must be \"train\", \"plan\", \"generate_scenario\", \"env\" or \"joint\"",
             ))
         }
     };
@@ -272,7 +280,10 @@ pub fn check_options<'py>(
             env_infos = ENV_OPTIONS.iter().map(|o| o.info).collect();
             (&env_infos, ENV_NULLABLE)
         }
-        "joint" => (&JOINT_ENV_OPTIONS, JOINT_NULLABLE),
+        "joint" => {
+            env_infos = JOINT_ENV_OPTIONS.iter().map(|o| o.info).collect();
+            (&env_infos, JOINT_NULLABLE)
+        }
         other => {
             return Err(invalid_argument(
                 py,

@@ -89,10 +89,9 @@ mod reward;
 pub use batch::{JointBatch, JointBuffers};
 pub use episode::{JointEpisode, JointStep};
 use motion::{box_lanes_of, BOX_LANES};
-#[cfg(test)]
-use options::MODEL_KEYS;
 pub use options::{
-    joint_option_info, JointOptions, DEFAULT_JOINT_LIMIT_DEG, JOINT_ENV_OPTIONS, JOINT_NULLABLE,
+    joint_option_default, joint_option_info, JointOptions, DEFAULT_JOINT_LIMIT_DEG,
+    JOINT_ENV_OPTIONS, JOINT_NULLABLE,
 };
 
 /// Where each field sits in the observation (ranges of indices).

@@ -1,10 +1,14 @@
-//! The joint env's keywords, declared once: [`JOINT_ENV_OPTIONS`] (key, domain, unit, doc
-//! line of each) and [`JointOptions`] (the values, with their defaults), read from an
-//! [`Options`] map by [`JointOptions::from_options`] and checked by [`JointOptions::check`].
+//! The joint env's keywords, declared once: [`JOINT_ENV_OPTIONS`] (key, domain, default,
+//! unit and doc line of each); [`JointOptions`] holds the model's values, its
+//! [`Default`] is the table's defaults, [`JointOptions::from_options`] reads an [`Options`]
+//! map and [`JointOptions::check`] checks the values against the same domains. The bindings
+//! derive Python's checks, `sixaxis_avoid.options("joint")` and docs/JOINT.md's keyword
+//! table from the table (scripts/derive_options.py).
 //!
 //! Units are in each keyword's doc line: degrees for joint steps and limits, mm for
 //! distances, 1/mm for the progress reward, steps for the step cap.
 
+use crate::env::{EnvDefault, EnvOption};
 use crate::error::Result;
 use crate::options::{
     check_value, reject_unknown, Domain, FromOption, OptionInfo, OptionValue, Options,
@@ -29,41 +33,46 @@ const NON_NEGATIVE: Domain = Domain::Float {
 const fn joint_option(
     key: &'static str,
     domain: Domain,
+    default: EnvDefault,
     unit: &'static str,
     doc: &'static str,
-) -> OptionInfo {
-    OptionInfo {
-        key,
-        field: "",
-        domain,
-        unit,
-        doc,
+) -> EnvOption {
+    EnvOption {
+        info: OptionInfo {
+            key,
+            field: "",
+            domain,
+            unit,
+            doc,
+        },
+        default,
     }
 }
 
 /// The keywords of `SixAxisAvoidJoint-v0`, `SixAxisAvoidJointGoal-v0` and their vector
 /// envs, declared once: the bindings check every keyword against this table
 /// (`check_options("joint", ...)`), and [`JointOptions::from_options`] reads them with the
-/// same domains. Defaults: [`JointOptions::default`]. [`JOINT_NULLABLE`] names those that
-/// may be `None`.
-pub static JOINT_ENV_OPTIONS: [OptionInfo; 17] = [
-    joint_option("max_joint_step_deg", Domain::Float { min: 0.0, max: 30.0, open_min: true }, "deg", "Largest joint increment of one step: action a_i in [-1, 1] moves joint i by a_i times this (default 2)."),
-    joint_option("target_tolerance_mm", POSITIVE, "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre; default 20)."),
-    joint_option("link_radius_mm", NON_NEGATIVE, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
-    joint_option("safe_distance_mm", POSITIVE, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
-    joint_option("substep_fraction", Domain::Float { min: 0.0, max: 1.0, open_min: true }, "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance (default 0.5)."),
-    joint_option("assist", Domain::Bool, "", "The assisted terms on or off: eq. 10's progress reward and eq. 9's detour penalty (default True)."),
-    joint_option("reward_scale", NON_NEGATIVE, "", "Factor applied to every reward (default 1)."),
-    joint_option("target_reward", NON_NEGATIVE, "", "Eq. 5's r: reward of the step that reaches the target (default 10)."),
-    joint_option("step_penalty", NON_NEGATIVE, "", "Eq. 5's p: penalty of an accepted step that does not reach the target (default 0.02)."),
-    joint_option("collision_penalty", NON_NEGATIVE, "", "Eq. 5's P: penalty of a refused step (default 1)."),
-    joint_option("repeat_collision_penalty", NON_NEGATIVE, "", "Eq. 9's p_e: extra penalty of a refused step after a refused step (default 2)."),
-    joint_option("reverse_after_collision_penalty", NON_NEGATIVE, "", "Eq. 9's p_o: extra penalty, times max(0, -cos) of the angle to the refused action, of an accepted step after a refused one (default 0.5)."),
-    joint_option("progress_reward", NON_NEGATIVE, "1/mm", "Eq. 10 in mm: reward per mm the terminal comes closer to the target (default 0.05)."),
-    joint_option("max_episode_steps", Domain::u32_from(1), "steps", "Truncation after this many steps (default 500; the single env's by Gymnasium's TimeLimit)."),
-    joint_option("num_envs", Domain::Int { min: 1, max: 1 << 24 }, "envs", "Environments of the native vector env."),
-    joint_option("copy", Domain::Bool, "", "Return copies of the vector env's buffers (Gymnasium's `copy`)."),
-    joint_option("render_mode", Domain::Choice(&["rgb_array"]), "", "Gymnasium's render mode: None (the joint envs do not render)."),
+/// same domains. Each line gives the keyword's default ([`JointOptions::default`] is read
+/// from here); [`JOINT_NULLABLE`] names those that may be `None` (exactly those whose
+/// default is [`EnvDefault::None`], a unit test checks).
+pub static JOINT_ENV_OPTIONS: [EnvOption; 17] = [
+    joint_option("max_joint_step_deg", Domain::Float { min: 0.0, max: 30.0, open_min: true }, EnvDefault::Float(2.0), "deg", "Largest joint increment of one step: action a_i in [-1, 1] moves joint i by a_i times this."),
+    joint_option("target_tolerance_mm", POSITIVE, EnvDefault::Float(20.0), "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre)."),
+    joint_option("link_radius_mm", NON_NEGATIVE, EnvDefault::None, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
+    joint_option("safe_distance_mm", POSITIVE, EnvDefault::None, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
+    joint_option("substep_fraction", Domain::Float { min: 0.0, max: 1.0, open_min: true }, EnvDefault::Float(0.5), "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance."),
+    joint_option("assist", Domain::Bool, EnvDefault::Bool(true), "", "The assisted terms on or off: eq. 10's progress reward and eq. 9's detour penalty."),
+    joint_option("reward_scale", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
+    joint_option("target_reward", NON_NEGATIVE, EnvDefault::Float(10.0), "", "Eq. 5's r: reward of the step that reaches the target."),
+    joint_option("step_penalty", NON_NEGATIVE, EnvDefault::Float(0.02), "", "Eq. 5's p: penalty of an accepted step that does not reach the target."),
+    joint_option("collision_penalty", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Eq. 5's P: penalty of a refused step."),
+    joint_option("repeat_collision_penalty", NON_NEGATIVE, EnvDefault::Float(2.0), "", "Eq. 9's p_e: extra penalty of a refused step after a refused step."),
+    joint_option("reverse_after_collision_penalty", NON_NEGATIVE, EnvDefault::Float(0.5), "", "Eq. 9's p_o: extra penalty, times max(0, -cos) of the angle to the refused action, of an accepted step after a refused one."),
+    joint_option("progress_reward", NON_NEGATIVE, EnvDefault::Float(0.05), "1/mm", "Eq. 10 in mm: reward per mm the terminal comes closer to the target."),
+    joint_option("max_episode_steps", Domain::u32_from(1), EnvDefault::Int(500), "steps", "Truncation after this many steps (the single env's by Gymnasium's TimeLimit, the vector envs' in Rust)."),
+    joint_option("num_envs", Domain::Int { min: 1, max: 1 << 24 }, EnvDefault::Int(1), "envs", "Environments of the native vector env."),
+    joint_option("copy", Domain::Bool, EnvDefault::Bool(true), "", "Return copies of the vector env's buffers (Gymnasium's `copy`)."),
+    joint_option("render_mode", Domain::Choice(&["rgb_array"]), EnvDefault::None, "", "Gymnasium's render mode: None (the joint envs do not render)."),
 ];
 
 /// The keywords of [`JOINT_ENV_OPTIONS`] that may be `None`.
@@ -90,7 +99,18 @@ pub(super) const MODEL_KEYS: [&str; 14] = [
 
 /// The entry of [`JOINT_ENV_OPTIONS`] for `key`.
 pub fn joint_option_info(key: &str) -> Option<&'static OptionInfo> {
-    JOINT_ENV_OPTIONS.iter().find(|i| i.key == key)
+    JOINT_ENV_OPTIONS
+        .iter()
+        .find(|o| o.key == key)
+        .map(|o| &o.info)
+}
+
+/// The default of the joint env keyword `key` (None: no such keyword).
+pub fn joint_option_default(key: &str) -> Option<EnvDefault> {
+    JOINT_ENV_OPTIONS
+        .iter()
+        .find(|o| o.key == key)
+        .map(|o| o.default)
 }
 
 /// Options of the joint-space env (see [`JOINT_ENV_OPTIONS`] for each one's doc and unit).
@@ -127,23 +147,34 @@ pub struct JointOptions {
 }
 
 impl Default for JointOptions {
+    /// The defaults of [`JOINT_ENV_OPTIONS`]; `None` for the nullable keywords (then the
+    /// scenario's value, see [`JointModel::new`](super::JointModel::new)).
     fn default() -> Self {
-        JointOptions {
-            max_joint_step_deg: 2.0,
-            target_tolerance_mm: 20.0,
+        // Every field is set from the table below but the nullable ones (a unit test checks
+        // that every other model keyword has a default).
+        let mut o = JointOptions {
+            max_joint_step_deg: 0.0,
+            target_tolerance_mm: 0.0,
             link_radius_mm: None,
             safe_distance_mm: None,
-            substep_fraction: 0.5,
-            assist: true,
-            reward_scale: 1.0,
-            target_reward: 10.0,
-            step_penalty: 0.02,
-            collision_penalty: 1.0,
-            repeat_collision_penalty: 2.0,
-            reverse_after_collision_penalty: 0.5,
-            progress_reward: 0.05,
-            max_episode_steps: 500,
+            substep_fraction: 0.0,
+            assist: false,
+            reward_scale: 0.0,
+            target_reward: 0.0,
+            step_penalty: 0.0,
+            collision_penalty: 0.0,
+            repeat_collision_penalty: 0.0,
+            reverse_after_collision_penalty: 0.0,
+            progress_reward: 0.0,
+            max_episode_steps: 0,
+        };
+        for key in MODEL_KEYS {
+            if let Some(v) = joint_option_default(key).and_then(EnvDefault::value) {
+                o.set(key, &v)
+                    .expect("the table's defaults lie in their domains (a unit test checks)");
+            }
         }
+        o
     }
 }
 
@@ -165,63 +196,75 @@ impl JointOptions {
         reject_unknown(&MODEL_KEYS, values)?;
         let mut o = JointOptions::default();
         for (key, v) in values {
-            let info = joint_option_info(key).expect("model keys are in the table");
-            let d = &info.domain;
-            let f = || f64::from_option(key, d, v);
-            match key.as_str() {
-                "max_joint_step_deg" => o.max_joint_step_deg = f()?,
-                "target_tolerance_mm" => o.target_tolerance_mm = f()?,
-                "link_radius_mm" => o.link_radius_mm = Some(f()?),
-                "safe_distance_mm" => o.safe_distance_mm = Some(f()?),
-                "substep_fraction" => o.substep_fraction = f()?,
-                "assist" => o.assist = bool::from_option(key, d, v)?,
-                "reward_scale" => o.reward_scale = f()?,
-                "target_reward" => o.target_reward = f()?,
-                "step_penalty" => o.step_penalty = f()?,
-                "collision_penalty" => o.collision_penalty = f()?,
-                "repeat_collision_penalty" => o.repeat_collision_penalty = f()?,
-                "reverse_after_collision_penalty" => o.reverse_after_collision_penalty = f()?,
-                "progress_reward" => o.progress_reward = f()?,
-                "max_episode_steps" => o.max_episode_steps = u32::from_option(key, d, v)?,
-                _ => unreachable!("MODEL_KEYS lists every arm of this match"),
-            }
+            o.set(key, v)?;
         }
         Ok(o)
     }
 
+    /// Set the model keyword `key` to `v` (its domain in [`JOINT_ENV_OPTIONS`]); `key` is one
+    /// of `MODEL_KEYS`.
+    fn set(&mut self, key: &str, v: &OptionValue) -> Result<()> {
+        let o = self;
+        let info = joint_option_info(key).expect("model keys are in the table");
+        let d = &info.domain;
+        let f = || f64::from_option(key, d, v);
+        match key {
+            "max_joint_step_deg" => o.max_joint_step_deg = f()?,
+            "target_tolerance_mm" => o.target_tolerance_mm = f()?,
+            "link_radius_mm" => o.link_radius_mm = Some(f()?),
+            "safe_distance_mm" => o.safe_distance_mm = Some(f()?),
+            "substep_fraction" => o.substep_fraction = f()?,
+            "assist" => o.assist = bool::from_option(key, d, v)?,
+            "reward_scale" => o.reward_scale = f()?,
+            "target_reward" => o.target_reward = f()?,
+            "step_penalty" => o.step_penalty = f()?,
+            "collision_penalty" => o.collision_penalty = f()?,
+            "repeat_collision_penalty" => o.repeat_collision_penalty = f()?,
+            "reverse_after_collision_penalty" => o.reverse_after_collision_penalty = f()?,
+            "progress_reward" => o.progress_reward = f()?,
+            "max_episode_steps" => o.max_episode_steps = u32::from_option(key, d, v)?,
+            _ => unreachable!("MODEL_KEYS lists every arm of this match"),
+        }
+        Ok(())
+    }
+
+    /// Each model keyword (`MODEL_KEYS`' order) with its value here (`None` for a nullable
+    /// keyword left to the scenario): what [`JointOptions::from_options`] reads back.
+    pub fn values(&self) -> Vec<(&'static str, Option<OptionValue>)> {
+        let f = |x: f64| Some(OptionValue::Float(x));
+        MODEL_KEYS
+            .iter()
+            .map(|&key| {
+                let v = match key {
+                    "max_joint_step_deg" => f(self.max_joint_step_deg),
+                    "target_tolerance_mm" => f(self.target_tolerance_mm),
+                    "link_radius_mm" => self.link_radius_mm.and_then(f),
+                    "safe_distance_mm" => self.safe_distance_mm.and_then(f),
+                    "substep_fraction" => f(self.substep_fraction),
+                    "assist" => Some(OptionValue::Bool(self.assist)),
+                    "reward_scale" => f(self.reward_scale),
+                    "target_reward" => f(self.target_reward),
+                    "step_penalty" => f(self.step_penalty),
+                    "collision_penalty" => f(self.collision_penalty),
+                    "repeat_collision_penalty" => f(self.repeat_collision_penalty),
+                    "reverse_after_collision_penalty" => f(self.reverse_after_collision_penalty),
+                    "progress_reward" => f(self.progress_reward),
+                    "max_episode_steps" => Some(OptionValue::Int(self.max_episode_steps.into())),
+                    _ => unreachable!("MODEL_KEYS lists every arm of this match"),
+                };
+                (key, v)
+            })
+            .collect()
+    }
+
     /// Check every field against its domain in [`JOINT_ENV_OPTIONS`]; the error names it.
     pub fn check(&self) -> Result<()> {
-        let floats = [
-            ("max_joint_step_deg", Some(self.max_joint_step_deg)),
-            ("target_tolerance_mm", Some(self.target_tolerance_mm)),
-            ("link_radius_mm", self.link_radius_mm),
-            ("safe_distance_mm", self.safe_distance_mm),
-            ("substep_fraction", Some(self.substep_fraction)),
-            ("reward_scale", Some(self.reward_scale)),
-            ("target_reward", Some(self.target_reward)),
-            ("step_penalty", Some(self.step_penalty)),
-            ("collision_penalty", Some(self.collision_penalty)),
-            (
-                "repeat_collision_penalty",
-                Some(self.repeat_collision_penalty),
-            ),
-            (
-                "reverse_after_collision_penalty",
-                Some(self.reverse_after_collision_penalty),
-            ),
-            ("progress_reward", Some(self.progress_reward)),
-        ];
-        for (key, v) in floats {
+        for (key, v) in self.values() {
             if let Some(v) = v {
-                let info = joint_option_info(key).expect("in the table");
-                check_value(key, &info.domain, &OptionValue::Float(v))?;
+                let info = joint_option_info(key).expect("model keys are in the table");
+                check_value(key, &info.domain, &v)?;
             }
         }
-        let info = joint_option_info("max_episode_steps").expect("in the table");
-        check_value(
-            "max_episode_steps",
-            &info.domain,
-            &OptionValue::Int(self.max_episode_steps.into()),
-        )
+        Ok(())
     }
 }

@@ -1,5 +1,7 @@
+use super::options::MODEL_KEYS;
 use super::*;
-use crate::options::{Domain, OptionValue, Options};
+use crate::env::EnvDefault;
+use crate::options::{check_value, Domain, OptionValue, Options};
 use std::sync::Arc;
 
 use rand::{Rng, SeedableRng};
@@ -48,6 +50,45 @@ fn table_and_options_agree() {
     o.insert("num_envs".into(), OptionValue::Int(3));
     let e = JointOptions::from_options(&o).unwrap_err().to_string();
     assert!(e.contains("`num_envs`"), "{e}");
+}
+
+/// The table's defaults lie in their domains, are `None` exactly for the nullable keywords,
+/// and are what `JointOptions::default()` holds (the model's keywords have no other
+/// default).
+#[test]
+fn defaults_come_from_the_table() {
+    for o in &JOINT_ENV_OPTIONS {
+        match o.default.value() {
+            None => assert!(
+                JOINT_NULLABLE.contains(&o.key),
+                "{} defaults to None",
+                o.key
+            ),
+            Some(v) => {
+                assert!(!JOINT_NULLABLE.contains(&o.key), "{} is nullable", o.key);
+                check_value(o.key, &o.domain, &v).unwrap();
+            }
+        }
+    }
+    let d = JointOptions::default();
+    let mut o = Options::new();
+    for key in MODEL_KEYS {
+        if let Some(v) = joint_option_default(key).unwrap().value() {
+            o.insert(key.to_string(), v);
+        }
+    }
+    // Setting every default explicitly changes nothing.
+    assert_eq!(JointOptions::from_options(&o).unwrap(), d);
+    assert_eq!(d.max_joint_step_deg, 2.0);
+    assert_eq!(d.max_episode_steps, 500);
+    assert_eq!(d.link_radius_mm, None);
+    assert!(d.assist);
+    assert_eq!(
+        joint_option_default("num_envs"),
+        Some(EnvDefault::Int(1)),
+        "num_envs"
+    );
+    assert_eq!(joint_option_default("no_such_keyword"), None);
 }
 
 #[test]
