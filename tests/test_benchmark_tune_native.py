@@ -8,7 +8,14 @@ import json
 import numpy as np
 import pytest
 from sixaxis_avoid.benchmark import __main__ as cli
-from sixaxis_avoid.benchmark.tune import NATIVE_SPACE, native_score, record_by_budget, tune_native
+from sixaxis_avoid.benchmark.tasks import load_suite
+from sixaxis_avoid.benchmark.tune import (
+    NATIVE_SPACE,
+    best_trial,
+    native_score,
+    record_by_budget,
+    tune_native,
+)
 
 
 def test_trials_are_seeded_scored_on_every_task_and_seed_and_exported(tmp_path):
@@ -24,10 +31,13 @@ def test_trials_are_seeded_scored_on_every_task_and_seed_and_exported(tmp_path):
             assert lo <= t["values"][k] <= hi
         assert len(t["runs"]) == 2 and all(r["env_steps"] == 4000 for r in t["runs"])
         assert t["objective"] == pytest.approx(np.mean([r["score"] for r in t["runs"]]))
+        assert 0.0 <= t["area"] <= 1.0
+        assert t["area"] == pytest.approx(np.mean([r["area"] for r in t["runs"]]))
     assert a["best"]["objective"] == max(t["objective"] for t in a["trials"])
-    # A run's score is the benchmark's: same values, same seed, same score.
+    assert a["checkpoints"] == load_suite("quick").checkpoints(4000)
+    # A run's score is the benchmark's: same values, same seed, same score (the tuning
+    # run's checkpoints do not change its final score).
     t0 = a["trials"][0]
-    from sixaxis_avoid.benchmark.tasks import load_suite
 
     task = load_suite("quick").tuning_tasks[0]
     again = native_score("q_assist", task, 101, 4000, t0["values"])
@@ -40,6 +50,15 @@ def test_trials_are_seeded_scored_on_every_task_and_seed_and_exported(tmp_path):
     assert entry["4000"]["values"] == a["best"]["values"]
     assert entry["4000"]["status"] == "tuned" and entry["4000"]["trials"] == "trials.json"
     assert entry["4000"]["objective"] == a["best"]["objective"]  # a number, as jax_tune's
+
+
+def test_ties_on_the_objective_go_to_the_larger_area_then_the_earlier_trial():
+    t = lambda n, obj, area: {"number": n, "objective": obj, "area": area}  # noqa: E731
+    assert best_trial([t(0, 1.0, 0.2), t(1, 0.9, 0.9), t(2, 1.0, 0.7)])["number"] == 2
+    assert best_trial([t(0, 1.0, 0.7), t(1, 1.0, 0.7)])["number"] == 0
+    # Equal up to rounding noise of a mean is a tie, not a win.
+    assert best_trial([t(0, 1.0 - 1e-15, 0.9), t(1, 1.0, 0.1)])["number"] == 0
+    assert best_trial([t(0, 0.5, 1.0), t(1, 0.6, 0.0)])["number"] == 1
 
 
 def test_the_command_writes_the_export(tmp_path, capsys):

@@ -141,20 +141,40 @@ NATIVE_TUNABLE = ("q_assist", "q_plain")
 
 
 def native_score(
-    learner: str, task: Any, seed: int, budget: int, hp: dict[str, Any]
+    learner: str,
+    task: Any,
+    seed: int,
+    budget: int,
+    hp: dict[str, Any],
+    checkpoints: list[int] | None = None,
 ) -> dict[str, Any]:
     """One tuning run of a tabular learner: ``budget`` env steps on ``task`` (the benchmark's
     own code path, :class:`~sixaxis_avoid.benchmark.learners.NativeQ` on a budget in env
-    steps); its final score (mean SPL over the task's evaluation targets) and success."""
+    steps); its final score (mean SPL over the task's evaluation targets), success, and the
+    area under its curve at ``checkpoints`` (env steps; default: the budget alone) as
+    :func:`curve_area` reads a run."""
     from sixaxis_avoid.benchmark.learners import RunContext, resolve
 
     cls = resolve(learner)
     lr = cls({**hp, "max_env_steps": int(budget), "epsilon_schedule": "env_steps"})
-    ctx = RunContext(task, seed, budget, lr.hyperparams, [budget], lr)
+    ctx = RunContext(task, seed, budget, lr.hyperparams, checkpoints or [budget], lr)
     lr.learn(ctx)
     ctx.finish()
     final = ctx.points[-1]
-    return {"score": final["score"], "success": final["success"], "env_steps": ctx.env_steps}
+    curve = [{"env_steps": p["env_steps"], "score": p["score"]} for p in ctx.points]
+    area = curve_area({"spec": {"budget": budget}, "result": {"curve": curve}})
+    return {
+        "score": final["score"],
+        "success": final["success"],
+        "area": area,
+        "env_steps": ctx.env_steps,
+    }
+
+
+def best_trial(trials: list[dict[str, Any]]) -> dict[str, Any]:
+    """The trial with the highest ``objective``; among tied ones the largest ``area`` (the
+    mean area under the curves), then the lowest ``number``."""
+    return max(trials, key=lambda t: (round(t["objective"], 12), t["area"], -t["number"]))
 
 
 def tune_native(
@@ -168,7 +188,13 @@ def tune_native(
 ) -> dict[str, Any]:
     """Random search (Optuna's ``RandomSampler(seed=sampler_seed)``) over
     :data:`NATIVE_SPACE` for a tabular learner at ``budget`` env steps: each trial is scored
-    by the mean final SPL over the suite's tuning tasks x ``seeds``; returns every trial."""
+    by the mean final SPL over the suite's tuning tasks x ``seeds``; returns every trial.
+
+    The best trial has the highest objective; trials tied on it (at large budgets several
+    reach 1.0 on every tuning task) are told apart by the mean area under their curves at
+    the suite's checkpoints (the one that gets there sooner), then by trial number. The first
+    v2 study took the earliest of six trials tied at 1.0 at 1M env steps, a near-greedy one
+    that found no path on the study's 50 mm worlds (docs/BENCHMARKS.md, *Tuning record*)."""
     import time
 
     import optuna
@@ -184,6 +210,7 @@ def tune_native(
     tasks = suite.tuning_tasks
     if not tasks:
         raise SystemExit(f"suite {suite.name}: no tuning tasks")
+    checkpoints = suite.checkpoints(budget)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     study = optuna.create_study(
         direction="maximize", sampler=optuna.samplers.RandomSampler(seed=sampler_seed)
@@ -198,7 +225,7 @@ def tune_native(
         }
         w0 = time.perf_counter()
         runs = [
-            {"task": t.id, "seed": s, **native_score(learner, t, s, budget, hp)}
+            {"task": t.id, "seed": s, **native_score(learner, t, s, budget, hp, checkpoints)}
             for t in tasks
             for s in seeds
         ]
@@ -210,6 +237,7 @@ def tune_native(
                 "values": hp,
                 "objective": value,
                 "success": float(np.mean([r["success"] for r in runs])),
+                "area": float(np.mean([r["area"] for r in runs])),
                 "runs": runs,
                 "wall_time_s": time.perf_counter() - w0,
             }
@@ -220,7 +248,7 @@ def tune_native(
                 f"{value:.3f} (best {study.best_value:.3f})",
                 file=sys.stderr,
             )
-    best = max(out, key=lambda t: (t["objective"], -t["number"]))
+    best = best_trial(out)
     return {
         "learner": learner,
         "budget": int(budget),
@@ -228,6 +256,8 @@ def tune_native(
         "tasks": [t.id for t in tasks],
         "seeds": seeds,
         "objective": "mean final SPL (the reported score) over the tuning tasks x seeds",
+        "tie_break": "mean area under the curve at the checkpoints, then the trial number",
+        "checkpoints": checkpoints,
         "search": {
             "sampler": f"optuna RandomSampler(seed={sampler_seed})",
             "space": {
@@ -235,7 +265,7 @@ def tune_native(
             },
             "fixed": {"epsilon_schedule": "env_steps", "max_env_steps": int(budget)},
         },
-        "best": {k: best[k] for k in ("number", "values", "objective", "success")},
+        "best": {k: best[k] for k in ("number", "values", "objective", "success", "area")},
         "trials": out,
         "wall_time_s": time.perf_counter() - t0,
         "cpu_time_s": time.process_time() - c0,
