@@ -169,7 +169,8 @@ impl std::ops::Deref for EnvOption {
     }
 }
 
-const fn env_option(
+/// One line of an env keyword table (`ENV_OPTIONS`, the joint env's `JOINT_ENV_OPTIONS`).
+pub(crate) const fn env_option(
     key: &'static str,
     domain: Domain,
     default: EnvDefault,

@@ -8,7 +8,7 @@
 //! Units are in each keyword's doc line: degrees for joint steps and limits, mm for
 //! distances, 1/mm for the progress reward, steps for the step cap.
 
-use crate::env::{EnvDefault, EnvOption};
+use crate::env::{env_option, EnvDefault, EnvOption};
 use crate::error::Result;
 use crate::options::{
     check_value, reject_unknown, Domain, FromOption, OptionInfo, OptionValue, Options,
@@ -30,25 +30,6 @@ const NON_NEGATIVE: Domain = Domain::Float {
     open_min: false,
 };
 
-const fn joint_option(
-    key: &'static str,
-    domain: Domain,
-    default: EnvDefault,
-    unit: &'static str,
-    doc: &'static str,
-) -> EnvOption {
-    EnvOption {
-        info: OptionInfo {
-            key,
-            field: "",
-            domain,
-            unit,
-            doc,
-        },
-        default,
-    }
-}
-
 /// The keywords of `SixAxisAvoidJoint-v0`, `SixAxisAvoidJointGoal-v0` and their vector
 /// envs, declared once: the bindings check every keyword against this table
 /// (`check_options("joint", ...)`), and [`JointOptions::from_options`] reads them with the
@@ -56,23 +37,23 @@ const fn joint_option(
 /// from here); [`JOINT_NULLABLE`] names those that may be `None` (exactly those whose
 /// default is [`EnvDefault::None`], a unit test checks).
 pub static JOINT_ENV_OPTIONS: [EnvOption; 17] = [
-    joint_option("max_joint_step_deg", Domain::Float { min: 0.0, max: 30.0, open_min: true }, EnvDefault::Float(2.0), "deg", "Largest joint increment of one step: action a_i in [-1, 1] moves joint i by a_i times this."),
-    joint_option("target_tolerance_mm", POSITIVE, EnvDefault::Float(20.0), "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre)."),
-    joint_option("link_radius_mm", NON_NEGATIVE, EnvDefault::None, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
-    joint_option("safe_distance_mm", POSITIVE, EnvDefault::None, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
-    joint_option("substep_fraction", Domain::Float { min: 0.0, max: 1.0, open_min: true }, EnvDefault::Float(0.5), "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance."),
-    joint_option("assist", Domain::Bool, EnvDefault::Bool(true), "", "The assisted terms on or off: eq. 10's progress reward and eq. 9's detour penalty."),
-    joint_option("reward_scale", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
-    joint_option("target_reward", NON_NEGATIVE, EnvDefault::Float(10.0), "", "Eq. 5's r: reward of the step that reaches the target."),
-    joint_option("step_penalty", NON_NEGATIVE, EnvDefault::Float(0.02), "", "Eq. 5's p: penalty of an accepted step that does not reach the target."),
-    joint_option("collision_penalty", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Eq. 5's P: penalty of a refused step."),
-    joint_option("repeat_collision_penalty", NON_NEGATIVE, EnvDefault::Float(2.0), "", "Eq. 9's p_e: extra penalty of a refused step after a refused step."),
-    joint_option("reverse_after_collision_penalty", NON_NEGATIVE, EnvDefault::Float(0.5), "", "Eq. 9's p_o: extra penalty, times max(0, -cos) of the angle to the refused action, of an accepted step after a refused one."),
-    joint_option("progress_reward", NON_NEGATIVE, EnvDefault::Float(0.05), "1/mm", "Eq. 10 in mm: reward per mm the terminal comes closer to the target."),
-    joint_option("max_episode_steps", Domain::u32_from(1), EnvDefault::Int(500), "steps", "Truncation after this many steps (the single env's by Gymnasium's TimeLimit, the vector envs' in Rust)."),
-    joint_option("num_envs", Domain::Int { min: 1, max: 1 << 24 }, EnvDefault::Int(1), "envs", "Environments of the native vector env."),
-    joint_option("copy", Domain::Bool, EnvDefault::Bool(true), "", "Return copies of the vector env's buffers (Gymnasium's `copy`)."),
-    joint_option("render_mode", Domain::Choice(&["rgb_array"]), EnvDefault::None, "", "Gymnasium's render mode: None (the joint envs do not render)."),
+    env_option("max_joint_step_deg", Domain::Float { min: 0.0, max: 30.0, open_min: true }, EnvDefault::Float(2.0), "deg", "Largest joint increment of one step: action a_i in [-1, 1] moves joint i by a_i times this."),
+    env_option("target_tolerance_mm", POSITIVE, EnvDefault::Float(20.0), "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre)."),
+    env_option("link_radius_mm", NON_NEGATIVE, EnvDefault::None, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
+    env_option("safe_distance_mm", POSITIVE, EnvDefault::None, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
+    env_option("substep_fraction", Domain::Float { min: 0.0, max: 1.0, open_min: true }, EnvDefault::Float(0.5), "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance."),
+    env_option("assist", Domain::Bool, EnvDefault::Bool(true), "", "The assisted terms on or off: eq. 10's progress reward and eq. 9's detour penalty."),
+    env_option("reward_scale", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
+    env_option("target_reward", NON_NEGATIVE, EnvDefault::Float(10.0), "", "Eq. 5's r: reward of the step that reaches the target."),
+    env_option("step_penalty", NON_NEGATIVE, EnvDefault::Float(0.02), "", "Eq. 5's p: penalty of an accepted step that does not reach the target."),
+    env_option("collision_penalty", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Eq. 5's P: penalty of a refused step."),
+    env_option("repeat_collision_penalty", NON_NEGATIVE, EnvDefault::Float(2.0), "", "Eq. 9's p_e: extra penalty of a refused step after a refused step."),
+    env_option("reverse_after_collision_penalty", NON_NEGATIVE, EnvDefault::Float(0.5), "", "Eq. 9's p_o: extra penalty, times max(0, -cos) of the angle to the refused action, of an accepted step after a refused one."),
+    env_option("progress_reward", NON_NEGATIVE, EnvDefault::Float(0.05), "1/mm", "Eq. 10 in mm: reward per mm the terminal comes closer to the target."),
+    env_option("max_episode_steps", Domain::u32_from(1), EnvDefault::Int(500), "steps", "Truncation after this many steps (the single env's by Gymnasium's TimeLimit, the vector envs' in Rust)."),
+    env_option("num_envs", Domain::Int { min: 1, max: 1 << 24 }, EnvDefault::Int(1), "envs", "Environments of the native vector env."),
+    env_option("copy", Domain::Bool, EnvDefault::Bool(true), "", "Return copies of the vector env's buffers (Gymnasium's `copy`)."),
+    env_option("render_mode", Domain::Choice(&["rgb_array"]), EnvDefault::None, "", "Gymnasium's render mode: None (the joint envs do not render)."),
 ];
 
 /// The keywords of [`JOINT_ENV_OPTIONS`] that may be `None`.
