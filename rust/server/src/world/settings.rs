@@ -165,7 +165,7 @@ pub struct ResetSettings {
     /// `seed`: seeds every lane at the next Step.
     pub seed: Option<u64>,
     /// `reset_mask`: the lanes the next Step restarts (a bool per lane; absent: all),
-    /// checked against the world's lanes by [`World::restart`].
+    /// checked against the world's lanes by [`super::World::restart`].
     pub reset_mask: Option<Tensor>,
 }
 
