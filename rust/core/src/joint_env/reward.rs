@@ -1,4 +1,4 @@
-//! The joint env's reward (docs/JOINT.md, "Reward"): eq. 5's target reward, step and
+//! The joint env's reward (docs/JOINT.md, "Rewards"): eq. 5's target reward, step and
 //! collision penalties, eq. 10 as progress in mm (`progress_reward`, 1/mm) and eq. 9's detour
 //! penalty, times `reward_scale`; and the same arithmetic for relabelled goals (HER).
 //!
