@@ -493,7 +493,8 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                     f"{lr} at {', '.join(fmt_steps(x) for x in bs)}"
                     for lr, bs in a["missing_budgets"].items()
                 )
-                + ". Their commands are under *How to run*.",
+                + ". Each is a tuning command and a run command per budget: those recorded "
+                "for the budgets run (*Tuning record*, *How to run*) with the budget changed.",
             ]
         L += [
             "",
