@@ -156,6 +156,26 @@ def test_deep_learner_is_deterministic_per_seed():
     assert execute_run(spec)["result"] == execute_run(spec)["result"]
 
 
+def test_a_budget_is_a_cap_on_whole_iterations():
+    from sixaxis_avoid.benchmark.learners import whole_iterations
+
+    assert whole_iterations(30_000, 1024) == 29_696  # 29 PPO rollouts of 16 x 64
+    assert whole_iterations(30_000, 1) == 30_000 and whole_iterations(30_000, 8) == 30_000
+    assert whole_iterations(30_001, 8) == 30_000
+    assert whole_iterations(500, 1024) == 1024  # one iteration alone is larger: it runs
+    # An SB3 run ends on the last whole rollout within its budget: 2 envs x 64 steps on a
+    # budget of 300 env steps trains two rollouts (256 steps), not three (384).
+    suite = load_suite("quick")
+    spec = plan_runs(suite, ["ppo"], seeds=[0], tasks=[suite.task("paper_simple")])[0]
+    spec = {
+        **spec,
+        "budget": 300,
+        "checkpoints": [300],
+        "hyperparams": {**spec["hyperparams"], "n_envs": 2, "n_steps": 64, "batch_size": 64},
+    }
+    assert execute_run(spec)["result"]["env_steps"] == 256
+
+
 @pytest.mark.parametrize(
     "learner, task_id",
     [("ppo", "paper_simple"), ("dqn", "paper_simple"), ("dqn", "goal-paper_simple")],

@@ -55,6 +55,19 @@ def test_tiny_ppo_run_records_its_flags_speed_and_evaluations(tmp_path):
     assert rec["speedup_vs_sb3"] == rec["env_steps_per_s"] / rec["sb3"]["env_steps_per_s"]
 
 
+def test_training_and_checkpoints_end_on_whole_iterations_within_the_budget():
+    # Iterations of 4 x 16 = 64 env steps on a budget of 2000: 31 iterations (1984 steps),
+    # not 32 (2048); the checkpoint at 1000 after 15 (960).
+    rec = jax_learners.main(
+        [
+            "--seeds", "1", "--budget", "2000", "--evaluations", "2",
+            "--set", "n_envs=4", "--set", "n_steps=16", "--set", "batch_size=32",
+            "--set", "n_epochs=1", "--set", "net_arch=[16,16]", "--set", "max_episode_steps=50",
+        ]
+    )  # fmt: skip
+    assert rec["eval_env_steps"] == [960, 1984]
+
+
 def test_missing_rejax_names_the_jax_learners_extra(monkeypatch):
     for mod in [m for m in sys.modules if m == "rejax" or m.startswith("rejax.")]:
         monkeypatch.delitem(sys.modules, mod)

@@ -24,9 +24,10 @@ task's evaluation targets at every checkpoint, inside the jitted loop: it acts f
 until the target or the step cap (the scenario's ``max_steps_per_episode``, which a
 deterministic policy caught in a loop also reaches); ``success`` is reaching the target and
 ``spl`` is ``optimal / max(moves, optimal)`` on success (moves exclude bumps), as
-``sixaxis_avoid.benchmark.learners.spl``. Checkpoints fall on whole training iterations
-(PPO: ``n_envs x n_steps`` env steps, DQN: ``n_envs``); each one's env-step count is
-recorded. Needs the ``jax-learners`` extra.
+``sixaxis_avoid.benchmark.learners.spl``. Checkpoints and the end of training fall on
+whole training iterations (PPO: ``n_envs x n_steps`` env steps, DQN: ``n_envs``), the most
+that fit in each checkpoint and in the budget (``learners.whole_iterations``); each one's
+env-step count is recorded. Needs the ``jax-learners`` extra.
 
 The values layer (defaults, the traced/static split, the checks, the mapping onto rejax)
 is :mod:`sixaxis_avoid.benchmark.jax_values`, which needs no JAX; its names are re-exported
@@ -39,7 +40,6 @@ import argparse
 import functools
 import importlib.metadata
 import json
-import math
 import time
 from pathlib import Path
 from typing import Any
@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from sixaxis_avoid._deps import require
+from sixaxis_avoid.benchmark.learners import whole_iterations
 from sixaxis_avoid.benchmark.jax_values import (  # re-exported: the learners' public names
     ACTIVATIONS,
     ALGOS,
@@ -261,8 +262,9 @@ class Compiled:
         self.optimal = [int(o) for o in task.optimal_lengths]
         self.eval_cap = int(task.scenario.max_steps_per_episode)
         step = iteration_steps(algo, values)
-        iters = sorted({max(1, math.ceil(int(c) / step)) for c in checkpoints if int(c) > 0})
-        total = max(1, math.ceil(int(budget) / step))
+        # Whole iterations at or under each checkpoint and the budget (learners.whole_iterations).
+        iters = sorted({whole_iterations(int(c), step) // step for c in checkpoints if int(c) > 0})
+        total = whole_iterations(int(budget), step) // step
         iters = [i for i in iters if i < total] + [total]
         self.iteration_steps = step
         self.checkpoint_iterations = iters

@@ -301,6 +301,16 @@ def split_budget(budget: int, parts: int) -> list[int]:
     return [q + (i < r) for i in range(parts)]
 
 
+def whole_iterations(budget: int, grain: int) -> int:
+    """The env steps a learner that trains in iterations of ``grain`` env steps (PPO: a
+    rollout of ``n_envs x n_steps``; DQN: one step of its ``n_envs`` envs) may use on a
+    budget of ``budget`` env steps: the most whole iterations that fit, at least one. A
+    budget is a cap: a run never ends past it unless one iteration alone is larger
+    (docs/BENCHMARKS.md, "Statistics")."""
+    grain = max(int(grain), 1)
+    return max(int(budget) // grain, 1) * grain
+
+
 class NativeQ(Learner):
     """The core's tabular Q-learner (``sixaxis_avoid.train``), the paper's eqs. 5-8.
 
@@ -666,7 +676,12 @@ class SB3Learner(Learner):
         )
         self.model.set_logger(Logger(None, []))  # no log files
         self._eval_envs: dict[Cell, gym.Env] = {}
-        self.model.learn(total_timesteps=ctx.budget)
+        # Whole rollouts (on-policy) or vector steps (off-policy) at or under the budget:
+        # SB3 ends learn() on the first whole one past total_timesteps.
+        n_steps = int(getattr(self.model, "n_steps", 1))
+        self.model.learn(
+            total_timesteps=whole_iterations(ctx.budget, n_steps * self.model.n_envs)
+        )
         vec.close()
 
     def greedy_path(self, world: Any) -> list[Cell] | None:

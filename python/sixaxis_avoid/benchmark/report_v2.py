@@ -351,6 +351,12 @@ def tasks_rows(suite: Suite) -> list[str]:
 STATISTICS = [
     "## Statistics",
     "",
+    "- **Budget**: a run uses at most its budget of env steps. A learner that trains in "
+    "whole iterations (PPO: rollouts of n_envs x n_steps; DQN: steps of its n_envs envs) "
+    "stops after the most whole iterations that fit in the budget, and scores each "
+    "checkpoint after the most that fit in it; the tabular learners stop at the budget "
+    "exactly. A run that used more is listed under *Over budget* and its row is not a "
+    "same-budget comparison.",
     "- **Score of a run**: SPL of its final greedy path (BFS optimum over the path's length if "
     "it reaches the target, else 0), averaged over the task's evaluation targets.",
     "- **Success rate**: targets reached out of runs x evaluation targets, with the Wilson "
