@@ -47,7 +47,6 @@ from typing import Any
 import numpy as np
 
 from sixaxis_avoid._deps import require
-from sixaxis_avoid.benchmark.learners import whole_iterations
 from sixaxis_avoid.benchmark.jax_values import (  # re-exported: the learners' public names
     ACTIVATIONS,
     ALGOS,
@@ -66,6 +65,7 @@ from sixaxis_avoid.benchmark.jax_values import (  # re-exported: the learners' p
     traced_fields,
     updates_per_env_step,
 )
+from sixaxis_avoid.benchmark.learners import whole_iterations
 
 __all__ = [
     "ACTIVATIONS", "ALGOS", "DEFAULTS", "DQN_DEFAULTS", "ENV_DEFAULTS", "LR_SCHEDULES",

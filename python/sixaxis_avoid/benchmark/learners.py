@@ -679,9 +679,7 @@ class SB3Learner(Learner):
         # Whole rollouts (on-policy) or vector steps (off-policy) at or under the budget:
         # SB3 ends learn() on the first whole one past total_timesteps.
         n_steps = int(getattr(self.model, "n_steps", 1))
-        self.model.learn(
-            total_timesteps=whole_iterations(ctx.budget, n_steps * self.model.n_envs)
-        )
+        self.model.learn(total_timesteps=whole_iterations(ctx.budget, n_steps * self.model.n_envs))
         vec.close()
 
     def greedy_path(self, world: Any) -> list[Cell] | None:
