@@ -223,6 +223,28 @@ def test_options_joint_lists_every_keyword_with_the_envs_default():
                 gym.make(sixaxis_avoid.JOINT_ENV_ID, **{key: bad})
 
 
+def test_docstring_states_the_tables_defaults():
+    """The env's docstring (Gymnasium's layout) takes every default from the one table:
+    each model keyword is listed with its default, the reward terms quote theirs, and no
+    placeholder is left; a placeholder naming no keyword is an error."""
+    import re
+
+    from sixaxis_avoid.joint import SixAxisAvoidJointEnv, documented
+
+    doc = SixAxisAvoidJointEnv.__doc__
+    for section in ("Description", "Action Space", "Observation Space", "Rewards",
+                    "Starting State", "Episode End", "Arguments", "Version History"):  # fmt: skip
+        assert f"## {section}\n" in doc, section
+    model = _core.JointEnvCore().options
+    for key, value in model.items():
+        shown = repr(value) if value is None or isinstance(value, bool) else f"{value:g}"
+        assert re.search(rf"- ``{key}`` \(([^,()]+, )?default {re.escape(shown)}\): ", doc), key
+    assert "``-step_penalty`` (0.02)" in doc and "(500 in the registration" in doc
+    assert "{" not in doc.replace("``{", "")
+    with pytest.raises(RuntimeError, match=r"\{step_penalti\}"):
+        documented("a typo: {step_penalti}")
+
+
 def test_goal_compute_reward_is_the_steps_reward():
     env = gym.make(sixaxis_avoid.JOINT_GOAL_ENV_ID)
     env.reset(seed=0)

@@ -5,6 +5,7 @@ rewards run in Rust (``sixaxis_core::joint_env``); docs/JOINT.md documents every
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -131,91 +132,89 @@ class JointGoalRewards:
 
 class SixAxisAvoidJointEnv(gym.Env):
     """The whole six-axis arm moves in joint space and must bring its terminal to a target
-    through clutter; every step is checked by the exact capsule-to-box clearance
-    (docs/JOINT.md). After *Path Planning with Autonomous Obstacle Avoidance Using
-    Reinforcement Learning for Six-axis Arms*, whose grid reward shaping it carries over.
+        through clutter; every step is checked by the exact capsule-to-box clearance
+        (docs/JOINT.md). After *Path Planning with Autonomous Obstacle Avoidance Using
+        Reinforcement Learning for Six-axis Arms*, whose grid reward shaping it carries over.
 
-    ## Description
+        ## Description
 
-    The scenario gives the arm (D-H table, beta_0, optional joint limits), the obstacles (the
-    cells' cubes of ``cell_mm`` and the boxes of ``obstacle_boxes_mm``, in mm) and the target
-    (the target cell's centre, mm). Each link is a capsule (``link_radius_mm``) around a
-    segment of the arm's polyline. A step moves the joints linearly by the scaled action; it
-    is refused, and the arm stays where it was (the paper's "move back"), when the new
-    angles leave the joint limits or when any of the interpolated poses brings a capsule
-    within ``safe_distance_mm`` of a box. The sub-steps are enough that no arm point moves
-    more than ``substep_fraction`` times the safe distance between two checked poses, so
-    no link can pass through a box. Dynamics, clearance and rewards run in Rust.
+        The scenario gives the arm (D-H table, beta_0, optional joint limits), the obstacles (the
+        cells' cubes of ``cell_mm`` and the boxes of ``obstacle_boxes_mm``, in mm) and the target
+        (the target cell's centre, mm). Each link is a capsule (``link_radius_mm``) around a
+        segment of the arm's polyline. A step moves the joints linearly by the scaled action; it
+        is refused, and the arm stays where it was (the paper's "move back"), when the new
+        angles leave the joint limits or when any of the interpolated poses brings a capsule
+        within ``safe_distance_mm`` of a box. The sub-steps are enough that no arm point moves
+        more than ``substep_fraction`` times the safe distance between two checked poses, so
+        no link can pass through a box. Dynamics, clearance and rewards run in Rust.
 
-    ## Action Space
+        ## Action Space
 
-    ``Box(-1, 1, (6,), float32)``: joint ``i`` moves by ``action[i] * max_joint_step_deg``
-    degrees (default 2).
+        ``Box(-1, 1, (6,), float32)``: joint ``i`` moves by ``action[i] * max_joint_step_deg``
+        degrees (default {max_joint_step_deg}).
 
-    ## Observation Space
+        ## Observation Space
 
-    ``Box(22 + L,)`` float32 (L = number of links of non-zero length, 5 for the paper's
-    arm; the layout is ``env.unwrapped.obs_layout``): sin of the six joints (6), cos of the
-    six joints (6), the terminal position divided by the arm's reach (3), the target divided
-    by the reach (3) (the reach is the polyline's length, so both lie in [-1, 1]), per link
-    the exact gap ``g`` (mm) to the nearest obstacle as ``g / (g + safe_distance_mm)`` (L;
-    1 without obstacles), the unit vector from the terminal to the nearest point of the
-    nearest obstacle box (3; zeros without obstacles), 1 if the last step was refused (1).
+        ``Box(22 + L,)`` float32 (L = number of links of non-zero length, 5 for the paper's
+        arm; the layout is ``env.unwrapped.obs_layout``): sin of the six joints (6), cos of the
+        six joints (6), the terminal position divided by the arm's reach (3), the target divided
+        by the reach (3) (the reach is the polyline's length, so both lie in [-1, 1]), per link
+        the exact gap ``g`` (mm) to the nearest obstacle as ``g / (g + safe_distance_mm)`` (L;
+        1 without obstacles), the unit vector from the terminal to the nearest point of the
+        nearest obstacle box (3; zeros without obstacles), 1 if the last step was refused (1).
 
-    ## Rewards
+        ## Rewards
 
-    The paper's shaping, per step, times ``reward_scale`` (defaults give O(1) per step):
+        The paper's shaping, per step, times ``reward_scale`` (default {reward_scale}; the
+        defaults give O(1) per step):
 
-    - eq. 5: ``+target_reward`` (10) for the step that ends within ``target_tolerance_mm``,
-      ``-collision_penalty`` (1) for a refused step, else ``-step_penalty`` (0.02);
-    - eq. 10 (``assist``): ``+progress_reward * (d_before - d_after)`` (0.05 per mm), d the
-      terminal-target distance in mm;
-    - eq. 9 (``assist``), after a refused step: ``-repeat_collision_penalty`` (2) if this
-      step is refused too, else ``-reverse_after_collision_penalty * max(0, -cos)`` (0.5)
-      of the angle between this action and the refused one.
+        - eq. 5: ``+target_reward`` ({target_reward}) for the step that ends within
+          ``target_tolerance_mm``, ``-collision_penalty`` ({collision_penalty}) for a refused
+          step, else ``-step_penalty`` ({step_penalty});
+        - eq. 10 (``assist``, default {assist}): ``+progress_reward * (d_before - d_after)``
+          ({progress_reward} per mm), d the terminal-target distance in mm;
+        - eq. 9 (``assist``), after a refused step: ``-repeat_collision_penalty``
+          ({repeat_collision_penalty}) if this step is refused too, else
+          ``-reverse_after_collision_penalty * max(0, -cos)`` ({reverse_after_collision_penalty})
+          of the angle between this action and the refused one.
 
-    ## Starting State
+        ## Starting State
 
-    The scenario's beta_0 (``arm.beta0_deg``), which must be clear and within the limits.
+        The scenario's beta_0 (``arm.beta0_deg``), which must be clear and within the limits.
 
-    ## Episode End
+        ## Episode End
 
-    - Termination: the terminal is within ``target_tolerance_mm`` (20 mm) of the target.
-    - Truncation: after ``max_episode_steps`` steps by Gymnasium's ``TimeLimit`` (500 in
-      the registration; the native vector env truncates in Rust).
+        - Termination: the terminal is within ``target_tolerance_mm`` ({target_tolerance_mm} mm)
+          of the target.
+        - Truncation: after ``max_episode_steps`` steps by Gymnasium's ``TimeLimit``
+          ({max_episode_steps} in the registration; the native vector env truncates in Rust).
 
-    ``info`` holds ``is_success`` (terminated on this step), ``clearance`` (the smallest
-    link gap, mm), ``refused``, ``distance_to_target`` (mm), ``detour_penalty`` (eq. 9's
-    part of the reward before scaling) and ``previous_achieved_goal`` (the terminal / reach
-    before the step, for ``compute_reward``).
+        ``info`` holds ``is_success`` (terminated on this step), ``clearance`` (the smallest
+        link gap, mm), ``refused``, ``distance_to_target`` (mm), ``detour_penalty`` (eq. 9's
+        part of the reward before scaling) and ``previous_achieved_goal`` (the terminal / reach
+        before the step, for ``compute_reward``).
 
-    ## Arguments
+        ## Arguments
 
-    ```python
-    import gymnasium as gym
-    import sixaxis_avoid  # registers the ids
+        ```python
+        import gymnasium as gym
+        import sixaxis_avoid  # registers the ids
 
-    env = gym.make(
-        "SixAxisAvoidJoint-v0",
-        scenario="paper_simple",  # built-in name, JSON path, dict, Scenario, or None
-        max_joint_step_deg=2.0,  # largest joint increment of a step, deg
-        target_tolerance_mm=20.0,  # termination distance, mm
-        link_radius_mm=None,  # None: the scenario's capsules radius, else 0
-        safe_distance_mm=None,  # None: the scenario's capsules margin, else d_p - cell/2, mm
-        substep_fraction=0.5,  # point motion between checked sub-steps / safe distance
-        assist=True,  # eqs. 9 and 10 on
-        reward_scale=1.0,
-        # target_reward, step_penalty, collision_penalty, repeat_collision_penalty,
-        # reverse_after_collision_penalty, progress_reward: the terms above
-    )
-    ```
+        env = gym.make("SixAxisAvoidJoint-v0", scenario="paper_simple", max_joint_step_deg=1.0)
+        ```
 
-    Every bad value raises ``InvalidArgumentError`` / ``ScenarioError`` (``ValueError``
-    subclasses) naming the keyword or field and the value.
+        ``scenario``: a built-in name, a JSON path, a dict, a ``Scenario``, or None (the paper's
+        simple case). The keywords, with their units and defaults, from the core's one table
+        (``sixaxis_avoid.options("joint")``; docs/JOINT.md's keyword table is the same):
 
-    ## Version History
+    {arguments}
 
-    - v0: initial version.
+        Every bad value raises ``InvalidArgumentError`` / ``ScenarioError`` (``ValueError``
+        subclasses) naming the keyword or field and the value.
+
+        ## Version History
+
+        - v0: initial version.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": []}
@@ -282,6 +281,35 @@ class SixAxisAvoidJointEnv(gym.Env):
     @property
     def link_radius_mm(self) -> float:
         return self._core.link_radius_mm
+
+
+def _default_text(value: Any) -> str:
+    if isinstance(value, bool) or value is None:
+        return repr(value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def documented(doc: str) -> str:
+    """``doc`` with each ``{keyword}`` replaced by that keyword's default and ``{arguments}``
+    by one line per model keyword (unit, default, doc line), all from the core's one table
+    (JOINT_ENV_OPTIONS), so the docstring cannot state a default the env does not have."""
+    rows = [o for o in _core.options("joint") if o["key"] not in _ENV_ONLY]
+    lines = []
+    for o in rows:
+        unit = f"{o['unit']}, " if o["unit"] else ""
+        lines.append(
+            f"    - ``{o['key']}`` ({unit}default {_default_text(o['default'])}): {o['doc']}"
+        )
+    out = doc.replace("{arguments}", "\n".join(lines))
+    for o in rows:
+        out = out.replace("{" + o["key"] + "}", _default_text(o["default"]))
+    left = re.findall(r"\{[a-z_]+\}", out)
+    if left:  # a placeholder naming no keyword: a typo in the docstring
+        raise RuntimeError(f"docstring placeholders without a keyword: {left}")
+    return out
+
+
+SixAxisAvoidJointEnv.__doc__ = documented(SixAxisAvoidJointEnv.__doc__ or "")
 
 
 class SixAxisAvoidJointGoalEnv(SixAxisAvoidJointEnv):
