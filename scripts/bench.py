@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import speed_summary
 from docsections import splice  # scripts/ is on sys.path when this script runs
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -249,6 +250,8 @@ def write_report(path: Path, data: dict) -> None:
     sb3 = ROOT / "docs" / "figures" / "bench_sb3.json"
     if sb3.exists():
         splice(path, "sb3", "\n".join(sb3_section(json.loads(sb3.read_text()))))
+    if path == speed_summary.PERFORMANCE:  # README's speed paragraph, from these tables
+        speed_summary.main([])
 
 
 # The env server (docs/SERVER.md): in-process vs raw TCP vs the server ---------------------------

@@ -109,6 +109,33 @@ def test_readme_sections_equal_their_generated_sources():
         )
 
 
+def test_readme_speed_paragraph_is_derived_from_the_performance_tables():
+    """README's speed paragraph is scripts/speed_summary.py's reading of the tables in
+    docs/PERFORMANCE.md (copied by --sync), and a table row it needs going missing is an
+    error naming the row, not a stale figure."""
+    import importlib.util
+    import sys
+
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        spec = importlib.util.spec_from_file_location(
+            "speed_summary", ROOT / "scripts" / "speed_summary.py"
+        )
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    page = (ROOT / "docs" / "PERFORMANCE.md").read_text()
+    ds = load_docsections()
+    assert ds.sections(page)["speed-summary"] == mod.summary(page), (
+        "run python scripts/speed_summary.py, then python scripts/docsections.py --sync README.md"
+    )
+    moved = page.replace("| `fk` | 95.0 ns |", "| `fk` | 96.0 ns |")
+    assert moved != page and "forward kinematics 96.0 ns" in mod.summary(moved)
+    with pytest.raises(SystemExit, match="`fk`"):
+        mod.summary(page.replace("| `fk` |", "| `forward` |"))
+
+
 def test_sync_copies_a_changed_section(tmp_path):
     ds = load_docsections()
     page, readme = tmp_path / "PAGE.md", tmp_path / "README.md"
