@@ -14,6 +14,7 @@ import argparse
 import json
 import sys
 import time
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -95,6 +96,15 @@ def baseline(argv: list[str]) -> int:
     p.add_argument("--gamma", type=float, default=0.98)
     p.add_argument("--learning-starts", type=int, default=1000)
     p.add_argument("--net", default="256,256", help="hidden layer sizes")
+    p.add_argument(
+        "--n-envs",
+        type=int,
+        default=1,
+        help="envs of the native SB3 VecEnv (sixaxis_avoid.sb3.SixAxisVecEnv) trained on; "
+        "SB3 takes one vector step (n-envs env steps) per train-freq",
+    )
+    p.add_argument("--train-freq", type=int, default=1, help="vector steps between updates")
+    p.add_argument("--gradient-steps", type=int, default=1, help="updates per train-freq")
     p.add_argument("--torch-threads", type=int, default=1)
     p.add_argument("--json", default=None)
     a = p.parse_args(argv)
@@ -118,7 +128,20 @@ def baseline(argv: list[str]) -> int:
     runs = []
     for seed in [int(v) for v in a.seeds.split(",")]:
         env = gym.make(env_id, scenario=scenario, max_episode_steps=a.max_episode_steps)
+        train_env: Any = env
+        if a.n_envs > 1:
+            from sixaxis_avoid.sb3 import SixAxisVecEnv
+
+            train_env = SixAxisVecEnv(
+                a.n_envs,
+                seed=seed,
+                env_id=env_id,
+                scenario=scenario,
+                max_episode_steps=a.max_episode_steps,
+            )
         kwargs: dict = {
+            "train_freq": a.train_freq,
+            "gradient_steps": a.gradient_steps,
             "learning_rate": a.learning_rate,
             "batch_size": a.batch_size,
             "gamma": a.gamma,
@@ -133,7 +156,7 @@ def baseline(argv: list[str]) -> int:
             kwargs["replay_buffer_kwargs"] = {"copy_info_dict": True}
         policy = "MultiInputPolicy" if a.her else "MlpPolicy"
         t0 = time.perf_counter()
-        model = algo(policy, env, **kwargs).learn(a.timesteps)
+        model = algo(policy, train_env, **kwargs).learn(a.timesteps)
         train_s = time.perf_counter() - t0
         successes, returns, lengths = 0, [], []
         for k in range(a.eval_episodes):
@@ -158,6 +181,8 @@ def baseline(argv: list[str]) -> int:
                 "mean_return": float(np.mean(returns)),
                 "terminal_path_mm": lengths,
                 "train_seconds": train_s,
+                "env_steps": int(model.num_timesteps),
+                "updates": int(model._n_updates),
             }
         )
         print(json.dumps(runs[-1]), flush=True)

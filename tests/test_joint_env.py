@@ -317,3 +317,28 @@ def test_sb3_vecenv_over_the_joint_batch():
     assert got.shape == (3,)
     with pytest.raises(sixaxis_avoid.InvalidArgumentError, match="render_mode"):
         SixAxisVecEnv(2, env_id=sixaxis_avoid.JOINT_ENV_ID, render_mode="rgb_array")
+
+
+def test_baseline_script_trains_on_the_native_vec_env(tmp_path):
+    """scripts/bench_joint.py baseline with --n-envs trains SB3 SAC on the native VecEnv:
+    the run counts every lane's env steps, updates gradient-steps times per vector step
+    after learning starts, and writes its JSON (docs/JOINT.md, "Baselines")."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "scripts" / "bench_joint.py"
+    spec = importlib.util.spec_from_file_location("bench_joint", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = tmp_path / "sac.json"
+    argv = ["--timesteps", "128", "--seeds", "0", "--n-envs", "8", "--learning-starts", "64",
+            "--gradient-steps", "2", "--net", "16,16", "--batch-size", "16",
+            "--max-episode-steps", "20", "--json", str(out)]  # fmt: skip
+    assert mod.baseline(argv) == 0
+    rec = json.loads(out.read_text())
+    (run,) = rec["runs"]
+    assert run["env_steps"] == 128
+    # 16 vector steps of 8 envs; updates from the vector step past 64 env steps: 8 x 2.
+    assert run["updates"] == 2 * (128 - 64) // 8
+    assert rec["algorithm2_terminal_path_mm"] == 900.0
