@@ -22,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import sixaxis_avoid
+from _helpers import wait_for
 from sixaxis_avoid.env import SixAxisAvoidEnv
 from sixaxis_avoid.remote import RemoteEnv, RemoteVectorEnv, ServerError
 from sixaxis_avoid.vector import SixAxisAvoidGoalVectorEnv, SixAxisAvoidVectorEnv
@@ -132,16 +133,6 @@ def test_observation_spaces_equal_the_in_process_ones(server, paper_simple):
 
 
 # Parity -------------------------------------------------------------------------------------
-def wait_for(cond, timeout: float = 15.0) -> bool:
-    """Whether ``cond()`` holds within ``timeout`` seconds."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if cond():
-            return True
-        time.sleep(0.05)
-    return cond()
-
-
 def _assert_same(a, b):
     if isinstance(b, dict):
         assert set(a) == set(b)
