@@ -22,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import sixaxis_avoid
+from _helpers import wait_for
 from sixaxis_avoid.env import SixAxisAvoidEnv
 from sixaxis_avoid.remote import RemoteEnv, RemoteVectorEnv, ServerError
 from sixaxis_avoid.vector import SixAxisAvoidGoalVectorEnv, SixAxisAvoidVectorEnv
@@ -132,16 +133,6 @@ def test_observation_spaces_equal_the_in_process_ones(server, paper_simple):
 
 
 # Parity -------------------------------------------------------------------------------------
-def wait_for(cond, timeout: float = 15.0) -> bool:
-    """Whether ``cond()`` holds within ``timeout`` seconds."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if cond():
-            return True
-        time.sleep(0.05)
-    return cond()
-
-
 def _assert_same(a, b):
     if isinstance(b, dict):
         assert set(a) == set(b)
@@ -563,15 +554,56 @@ def test_tls_trajectories_equal_the_in_process_env(tls_server, tls_files, near_t
 def test_a_plaintext_client_of_a_tls_server_fails_within_its_timeout(tls_server, transport):
     """No hang: grpcio never gets a ready channel (TimeoutError at connect_timeout, with
     gRPC's account of the last attempt); the Rust client's HTTP/2 handshake is answered with
-    TLS bytes (ConnectionError at once)."""
+    TLS bytes (ConnectionError at once). Both messages say the server answers in TLS and
+    name the `credentials=` keyword, after the transport's own account."""
     t0 = time.monotonic()
     with pytest.raises((TimeoutError, ConnectionError)) as e:
         RemoteEnv(tls_server, transport=transport, connect_timeout=1.0, timeout=5.0)
     assert time.monotonic() - t0 < 5
-    assert tls_server.address in str(e.value)
+    message = str(e.value)
+    assert tls_server.address in message
+    assert "TLS" in message and "credentials=grpc.ssl_channel_credentials(" in message
     if transport == "grpc":
-        assert e.type is TimeoutError and "connect_timeout=1.0" in str(e.value)
+        assert e.type is TimeoutError and "connect_timeout=1.0" in message
+        assert "(the last attempt: " in message
+    else:
+        assert e.type is ConnectionError
+        # tonic's own words are kept before the hint.
+        assert "during CreateWorld (UNKNOWN: transport error" in message
     assert wait_for(lambda: tls_server.sessions == 0)
+
+
+def test_a_server_that_is_not_http2_gets_no_tls_hint(transport):
+    """The TLS hint is a diagnosis, not a guess: a plaintext server that answers the HTTP/2
+    preface with HTTP/1.1 and closes fails the session the same way, and is not said to be
+    a TLS server."""
+    import socket
+
+    listener = socket.create_server(("127.0.0.1", 0))
+    stop = threading.Event()
+
+    def answer():
+        listener.settimeout(0.1)
+        while not stop.is_set():
+            try:
+                conn, _ = listener.accept()
+            except OSError:
+                continue
+            with conn:
+                conn.sendall(b"HTTP/1.1 400 Bad Request\r\nConnection: close\r\n\r\n")
+
+    thread = threading.Thread(target=answer, daemon=True)
+    thread.start()
+    address = f"127.0.0.1:{listener.getsockname()[1]}"
+    try:
+        with pytest.raises((TimeoutError, ConnectionError)) as e:
+            RemoteEnv(address, transport=transport, connect_timeout=1.0, timeout=5.0)
+    finally:
+        stop.set()
+        thread.join()
+        listener.close()
+    assert address in str(e.value)
+    assert "TLS" not in str(e.value) and "credentials" not in str(e.value)
 
 
 def test_a_client_trusting_another_ca_is_refused(tls_server, tls_files):

@@ -6,12 +6,12 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
-import time
 
 import grpc
 import numpy as np
 import pytest
 import sixaxis_avoid
+from _helpers import wait_for
 from dm_env_rpc.v1 import connection, error, tensor_utils
 from dm_env_rpc.v1 import dm_env_rpc_pb2 as pb
 from sixaxis_avoid.vector import SixAxisAvoidGoalVectorEnv, SixAxisAvoidVectorEnv
@@ -47,15 +47,6 @@ def step(conn, actions=None, uids=(OBS,)):
     acts = {} if actions is None else {1: pack(np.asarray(actions, dtype=np.int32))}
     r = conn.send(pb.StepRequest(actions=acts, requested_observations=list(uids)))
     return r.state, {u: tensor_utils.unpack_tensor(t) for u, t in r.observations.items()}
-
-
-def wait_for(cond, timeout=15.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if cond():
-            return True
-        time.sleep(0.05)
-    return cond()
 
 
 ALL = (OBS, REWARD, DISCOUNT, TERMINATED, TRUNCATED, IS_SUCCESS, COLLIDED, DISTANCE, CELL, DETOUR)

@@ -10,6 +10,7 @@ waits), and ``"grpc"``, grpcio with dm-env-rpc's message packing (used for TLS
 from __future__ import annotations
 
 import queue
+import socket
 import threading
 import time
 import weakref
@@ -152,6 +153,29 @@ def _last_attempt(channel: Any) -> str:
     return ""
 
 
+def _answers_in_tls(address: str) -> bool:
+    """Whether the server at ``address`` (``host:port``, ``unix:PATH``) answers the HTTP/2
+    client preface with a TLS record (a server started with ``--tls-cert``/``--tls-key``
+    sends an alert: content type 21, version 3.x); False if nothing answers within half a
+    second. As the Rust client's probe (rust/python/src/client/transport.rs)."""
+    try:
+        if address.startswith("unix:"):
+            path = address[len("unix:") :]
+            sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            sock.settimeout(0.5)
+            sock.connect(path[2:] if path.startswith("//") else path)
+        else:
+            host, _, port = address.rpartition(":")
+            sock = socket.create_connection((host.strip("[]"), int(port)), timeout=0.5)
+        with sock:
+            sock.sendall(b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n")
+            head = sock.recv(2)
+    except (OSError, ValueError):
+        return False
+    # TLS record types 20-23, then the major version 3; an HTTP/2 server's SETTINGS begins 0.
+    return len(head) == 2 and 20 <= head[0] <= 23 and head[1] == 3
+
+
 class _Spec:
     """One tensor spec of a world: ``name``, ``dtype`` (the protocol's DataType number) and
     ``shape``, whichever transport read it."""
@@ -285,9 +309,18 @@ class _GrpcSession(_BaseSession):
         except grpc.FutureTimeoutError:
             why = _last_attempt(self._channel)
             self._channel.close()
+            tls = credentials is None and _answers_in_tls(address)
             raise TimeoutError(
                 f"no env server answered at {address} within connect_timeout={connect_timeout} s"
                 + (f" (the last attempt: {why})" if why else "")
+                + (
+                    ": it answers in TLS (a server started with --tls-cert/--tls-key), and "
+                    "this channel is plaintext; pass "
+                    "credentials=grpc.ssl_channel_credentials(root_certificates=...) "
+                    '(docs/SERVER.md "Security")'
+                    if tls
+                    else ""
+                )
             ) from None
         metadata = [("authorization", f"Bearer {token}")] if token is not None else None
         self._requests: queue.SimpleQueue = queue.SimpleQueue()

@@ -73,6 +73,20 @@ pub enum Domain {
 }
 
 impl Domain {
+    /// Finite numbers > 0 (mm, deg, ...): "must be a finite number > 0".
+    pub const POSITIVE: Domain = Domain::Float {
+        min: 0.0,
+        max: f64::INFINITY,
+        open_min: true,
+    };
+
+    /// Finite numbers >= 0 (a penalty, a scale): "must be a finite number >= 0".
+    pub const NON_NEGATIVE: Domain = Domain::Float {
+        min: 0.0,
+        max: f64::INFINITY,
+        open_min: false,
+    };
+
     /// The integers of a `u32` field from `min`.
     pub const fn u32_from(min: i128) -> Domain {
         Domain::Int {
@@ -615,6 +629,11 @@ mod tests {
             open_min: false,
         };
         assert_eq!(f.reason(), "must be a number in [0, 1]");
+        assert_eq!(Domain::POSITIVE.reason(), "must be a finite number > 0");
+        assert_eq!(
+            Domain::NON_NEGATIVE.reason(),
+            "must be a finite number >= 0"
+        );
         assert_eq!(Domain::Choice(&["a", "b"]).reason(), "must be one of a, b");
     }
 
@@ -632,11 +651,7 @@ mod tests {
             let e = u32::from_option("n", &d, &bad).unwrap_err().to_string();
             assert!(e.starts_with("invalid argument `n` = "), "{e}");
         }
-        let f = Domain::Float {
-            min: 0.0,
-            max: f64::INFINITY,
-            open_min: true,
-        };
+        let f = Domain::POSITIVE;
         assert!(f64::from_option("x", &f, &OptionValue::Float(f64::NAN)).is_err());
         assert!(f64::from_option("x", &f, &OptionValue::Float(0.0)).is_err());
         assert_eq!(
@@ -644,6 +659,17 @@ mod tests {
             3.0
         );
         assert!(bool::from_option("b", &Domain::Bool, &OptionValue::Int(1)).is_err());
+        let n = Domain::NON_NEGATIVE;
+        assert_eq!(
+            f64::from_option("x", &n, &OptionValue::Float(0.0)).unwrap(),
+            0.0
+        );
+        assert_eq!(
+            f64::from_option("x", &n, &OptionValue::Float(-0.5))
+                .unwrap_err()
+                .to_string(),
+            "invalid argument `x` = -0.5: must be a finite number >= 0"
+        );
     }
 
     #[test]

@@ -113,12 +113,6 @@ impl EnvOptions {
     }
 }
 
-/// The domain of `reward_scale`: a finite number >= 0.
-const REWARD_SCALE: Domain = Domain::Float {
-    min: 0.0,
-    max: f64::INFINITY,
-    open_min: false,
-};
 /// The domain of `num_envs`: 1 to 2^24 environments in one batch.
 const NUM_ENVS: Domain = Domain::Int {
     min: 1,
@@ -196,7 +190,7 @@ pub(crate) const fn env_option(
 pub static ENV_OPTIONS: [EnvOption; 11] = [
     env_option("obs_type", Domain::Choice(&["vector", "index"]), EnvDefault::Text("vector"), "", "The observation: `vector` (terminal, target and neighbour flags, float32) or `index` (the state number); the goal-conditioned Dict is the id SixAxisAvoidGoal-v0."),
     env_option("assist", Domain::Bool, EnvDefault::None, "", "The assisted strategies (eqs. 9 and 10) on or off; None: the scenario's `learning.assist_detour` / `learning.assist_distance` (docs/SCENARIOS.md, the `assist` default)."),
-    env_option("reward_scale", REWARD_SCALE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
+    env_option("reward_scale", Domain::NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
     env_option("random_target", Domain::Bool, EnvDefault::Bool(false), "", "Draw the target from the free cells at every reset."),
     env_option("arm_aware", Domain::Bool, EnvDefault::Bool(false), "", "Cells no clear arm pose reaches count as obstacles."),
     env_option("num_envs", NUM_ENVS, EnvDefault::Int(1), "envs", "Environments of the native vector env."),
@@ -237,7 +231,7 @@ impl EnvModel {
     pub fn new(scenario: &Scenario, opts: EnvOptions) -> Result<EnvModel> {
         check_value(
             "reward_scale",
-            &REWARD_SCALE,
+            &Domain::NON_NEGATIVE,
             &OptionValue::Float(opts.reward_scale),
         )?;
         for (what, c) in [("start", scenario.start), ("target", scenario.target)] {

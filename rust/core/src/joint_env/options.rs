@@ -17,19 +17,6 @@ use crate::options::{
 /// Default joint limits where the scenario gives none, degrees: every joint in [-180, 180].
 pub const DEFAULT_JOINT_LIMIT_DEG: [f64; 2] = [-180.0, 180.0];
 
-/// Positive finite numbers (mm, deg, ...).
-const POSITIVE: Domain = Domain::Float {
-    min: 0.0,
-    max: f64::INFINITY,
-    open_min: true,
-};
-/// Finite numbers >= 0.
-const NON_NEGATIVE: Domain = Domain::Float {
-    min: 0.0,
-    max: f64::INFINITY,
-    open_min: false,
-};
-
 /// The keywords of `SixAxisAvoidJoint-v0`, `SixAxisAvoidJointGoal-v0` and their vector
 /// envs, declared once: the bindings check every keyword against this table
 /// (`check_options("joint", ...)`), and [`JointOptions::from_options`] reads them with the
@@ -38,18 +25,18 @@ const NON_NEGATIVE: Domain = Domain::Float {
 /// default is [`EnvDefault::None`], a unit test checks).
 pub static JOINT_ENV_OPTIONS: [EnvOption; 17] = [
     env_option("max_joint_step_deg", Domain::Float { min: 0.0, max: 30.0, open_min: true }, EnvDefault::Float(2.0), "deg", "Largest joint increment of one step: action a_i in [-1, 1] moves joint i by a_i times this."),
-    env_option("target_tolerance_mm", POSITIVE, EnvDefault::Float(20.0), "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre)."),
-    env_option("link_radius_mm", NON_NEGATIVE, EnvDefault::None, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
-    env_option("safe_distance_mm", POSITIVE, EnvDefault::None, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
+    env_option("target_tolerance_mm", Domain::POSITIVE, EnvDefault::Float(20.0), "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre)."),
+    env_option("link_radius_mm", Domain::NON_NEGATIVE, EnvDefault::None, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
+    env_option("safe_distance_mm", Domain::POSITIVE, EnvDefault::None, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
     env_option("substep_fraction", Domain::Float { min: 0.0, max: 1.0, open_min: true }, EnvDefault::Float(0.5), "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance."),
     env_option("assist", Domain::Bool, EnvDefault::Bool(true), "", "The assisted terms on or off: eq. 10's progress reward and eq. 9's detour penalty."),
-    env_option("reward_scale", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
-    env_option("target_reward", NON_NEGATIVE, EnvDefault::Float(10.0), "", "Eq. 5's r: reward of the step that reaches the target."),
-    env_option("step_penalty", NON_NEGATIVE, EnvDefault::Float(0.02), "", "Eq. 5's p: penalty of an accepted step that does not reach the target."),
-    env_option("collision_penalty", NON_NEGATIVE, EnvDefault::Float(1.0), "", "Eq. 5's P: penalty of a refused step."),
-    env_option("repeat_collision_penalty", NON_NEGATIVE, EnvDefault::Float(2.0), "", "Eq. 9's p_e: extra penalty of a refused step after a refused step."),
-    env_option("reverse_after_collision_penalty", NON_NEGATIVE, EnvDefault::Float(0.5), "", "Eq. 9's p_o: extra penalty, times max(0, -cos) of the angle to the refused action, of an accepted step after a refused one."),
-    env_option("progress_reward", NON_NEGATIVE, EnvDefault::Float(0.05), "1/mm", "Eq. 10 in mm: reward per mm the terminal comes closer to the target."),
+    env_option("reward_scale", Domain::NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
+    env_option("target_reward", Domain::NON_NEGATIVE, EnvDefault::Float(10.0), "", "Eq. 5's r: reward of the step that reaches the target."),
+    env_option("step_penalty", Domain::NON_NEGATIVE, EnvDefault::Float(0.02), "", "Eq. 5's p: penalty of an accepted step that does not reach the target."),
+    env_option("collision_penalty", Domain::NON_NEGATIVE, EnvDefault::Float(1.0), "", "Eq. 5's P: penalty of a refused step."),
+    env_option("repeat_collision_penalty", Domain::NON_NEGATIVE, EnvDefault::Float(2.0), "", "Eq. 9's p_e: extra penalty of a refused step after a refused step."),
+    env_option("reverse_after_collision_penalty", Domain::NON_NEGATIVE, EnvDefault::Float(0.5), "", "Eq. 9's p_o: extra penalty, times max(0, -cos) of the angle to the refused action, of an accepted step after a refused one."),
+    env_option("progress_reward", Domain::NON_NEGATIVE, EnvDefault::Float(0.05), "1/mm", "Eq. 10 in mm: reward per mm the terminal comes closer to the target."),
     env_option("max_episode_steps", Domain::u32_from(1), EnvDefault::Int(500), "steps", "Truncation after this many steps (the single env's by Gymnasium's TimeLimit, the vector envs' in Rust)."),
     env_option("num_envs", Domain::Int { min: 1, max: 1 << 24 }, EnvDefault::Int(1), "envs", "Environments of the native vector env."),
     env_option("copy", Domain::Bool, EnvDefault::Bool(true), "", "Return copies of the vector env's buffers (Gymnasium's `copy`)."),

@@ -56,13 +56,6 @@ const UNIT: Domain = Domain::Float {
     open_min: false,
 };
 
-/// The domain of a finite non-negative number.
-const NON_NEGATIVE: Domain = Domain::Float {
-    min: 0.0,
-    max: f64::INFINITY,
-    open_min: false,
-};
-
 option_set! {
     /// Q-learning parameters (eqs. 6-7) and the assisted strategies: the scenario's
     /// `learning` section and the options of a training run (the one declaration of the
@@ -108,7 +101,7 @@ option_set! {
         epsilon_schedule: EpsilonSchedule = EpsilonSchedule::Episodes; "epsilon_schedule", EpsilonSchedule::DOMAIN, "";
         /// With `epsilon_schedule = "env_steps"`: the fraction of `max_env_steps` over which
         /// epsilon falls linearly to 0 (0.99: the paper's M / eta_set = 9900 / 10000).
-        epsilon_decay_fraction: f64 = 0.99; "epsilon_decay_fraction", NON_NEGATIVE, "";
+        epsilon_decay_fraction: f64 = 0.99; "epsilon_decay_fraction", Domain::NON_NEGATIVE, "";
     }
 }
 

@@ -67,6 +67,14 @@ pub(super) enum ClientError {
         what: String,
         status: Option<(i32, String)>,
     },
+    /// The connection failed before the call's headers and the server answers a plaintext
+    /// HTTP/2 preface in TLS: a TLS server, which this transport cannot talk to.
+    PlaintextToTls {
+        address: String,
+        what: String,
+        code: i32,
+        details: String,
+    },
     /// `close()` was called.
     Closed { address: String },
     /// The server answered a request with an error Status; the stream goes on.
@@ -131,6 +139,19 @@ pub(super) fn to_py(py: Python<'_>, err: ClientError) -> PyErr {
         } => PyConnectionError::new_err(format!(
             "the env server at {address} ended the session during {what} ({}: {details}); \
              the world is gone: make a new env",
+            code_name(code)
+        )),
+        ClientError::PlaintextToTls {
+            address,
+            what,
+            code,
+            details,
+        } => PyConnectionError::new_err(format!(
+            "the env server at {address} ended the session during {what} ({}: {details}): \
+             it answers in TLS (a server started with --tls-cert/--tls-key), and this \
+             client speaks plaintext HTTP/2; pass \
+             credentials=grpc.ssl_channel_credentials(root_certificates=...) to connect over \
+             TLS (it selects transport=\"grpc\"; docs/SERVER.md \"Security\")",
             code_name(code)
         )),
         ClientError::Closed { address } => {

@@ -26,7 +26,7 @@ use tonic::metadata::MetadataValue;
 use tonic::Streaming;
 
 use super::error::ClientError;
-use super::transport::{connect_once, keep, target_of, Keeper};
+use super::transport::{answers_in_tls, connect_once, keep, target_of, Keeper, Target};
 
 /// The kind of a request written and not yet answered.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,6 +81,7 @@ pub(super) enum Inbound {
 /// The client proper (behind the Python object's mutex).
 pub(super) struct Client {
     address: String,
+    target: Target,
     timeout: Duration,
     timeout_s: f64,
     rt: Arc<Runtime>,
@@ -171,6 +172,7 @@ impl Client {
         };
         Ok(Client {
             address,
+            target,
             timeout: Duration::from_secs_f64(timeout),
             timeout_s: timeout,
             rt,
@@ -254,9 +256,11 @@ impl Client {
         let timeout = self.timeout;
         let inbound = &mut self.inbound;
         // The timer is made inside the runtime (it needs its context).
-        let got = self.rt.block_on(async move {
+        let mut opening = false;
+        let got = self.rt.block_on(async {
             tokio::time::timeout(timeout, async {
                 if let Inbound::Opening(fut) = inbound {
+                    opening = true;
                     let r = fut.await;
                     *inbound = match r {
                         Ok(resp) => Inbound::Open(Box::new(resp.into_inner())),
@@ -300,6 +304,18 @@ impl Client {
                         address,
                         code,
                         details,
+                    }
+                } else if opening
+                    && std::error::Error::source(&status).is_some()
+                    && self.rt.block_on(answers_in_tls(&self.target))
+                {
+                    // The connection failed before the call's headers and the server
+                    // speaks TLS to a plaintext HTTP/2 preface (docs/SERVER.md "Security").
+                    ClientError::PlaintextToTls {
+                        address,
+                        what,
+                        code,
+                        details: status_chain(&status),
                     }
                 } else {
                     ClientError::Ended {
@@ -388,4 +404,21 @@ pub(super) fn payload_name(p: Option<&Resp>) -> &'static str {
         Some(Resp::Extension(_)) => "an extension",
         Some(Resp::Error(_)) => "an error",
     }
+}
+
+/// A Status's message and the errors under it, ": "-joined (tonic's message of a failed
+/// connection is "transport error"; hyper's and h2's account of it are its sources, e.g.
+/// "connection error: stream closed because of a broken pipe").
+fn status_chain(status: &tonic::Status) -> String {
+    let mut text = status.message().to_string();
+    let mut source = std::error::Error::source(status);
+    while let Some(e) = source {
+        let s = e.to_string();
+        if !text.contains(&s) {
+            text.push_str(": ");
+            text.push_str(&s);
+        }
+        source = e.source();
+    }
+    text
 }

@@ -66,6 +66,32 @@ pub(super) async fn connect_once(target: &Target) -> Result<Channel, String> {
     }
 }
 
+/// Whether the server at `target` answers the HTTP/2 client preface with a TLS record (a
+/// server started with `--tls-cert`/`--tls-key` sends an alert: content type 21, version
+/// 3.x): one short-lived connection, false if nothing answers within half a second. Asked
+/// only after a connection failed before the call's headers, to tell the caller why.
+pub(super) async fn answers_in_tls(target: &Target) -> bool {
+    use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+    async fn first_bytes<S: AsyncRead + AsyncWrite + Unpin>(mut s: S) -> std::io::Result<[u8; 2]> {
+        s.write_all(b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n").await?;
+        let mut head = [0u8; 2];
+        s.read_exact(&mut head).await?;
+        Ok(head)
+    }
+    let probe = async {
+        match target {
+            Target::Tcp(a) => first_bytes(tokio::net::TcpStream::connect(a).await?).await,
+            Target::Uds(p) => first_bytes(tokio::net::UnixStream::connect(p).await?).await,
+        }
+    };
+    // TLS record types 20-23 (change_cipher_spec, alert, handshake, application_data),
+    // then the major version 3; an HTTP/2 server's first frame (SETTINGS) begins 0x00.
+    matches!(
+        tokio::time::timeout(Duration::from_millis(500), probe).await,
+        Ok(Ok([20..=23, 3]))
+    )
+}
+
 /// What the keeper thread and the calls share.
 pub(super) struct Keeper {
     /// Milliseconds since `epoch` at the end of the last call.
