@@ -587,7 +587,9 @@ def markdown(
         "place and are not moves.",
         "- **env steps**: env steps the learner used. Tabular Q-learning: the paper's episode "
         "count (10000 unless the suite says otherwise); on goal tasks re-learned per target and "
-        "summed. Deep learners: the suite's budget (rounded up to a rollout by PPO/A2C).",
+        "summed. Deep learners: the suite's budget (v1's run files: rounded up to a whole "
+        "rollout by PPO/A2C; runs made since the budget became a cap stop at the last whole "
+        "rollout within it).",
         "- **1st success**: env steps and training time (wall / CPU, greedy evaluations "
         "excluded) until the first training episode that reached a target; median over the runs "
         "that had one (their fraction in brackets).",
