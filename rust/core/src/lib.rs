@@ -41,6 +41,7 @@
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod clearance;
 pub mod env;
 pub mod error;

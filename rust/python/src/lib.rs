@@ -21,6 +21,7 @@ mod serve;
 mod tables;
 mod train;
 mod util;
+mod vec_core;
 
 /// Raise the Python exception of one core error variant (for the tests of the mapping).
 /// `kind` is the variant's name: `InvalidScenario`, `ScenarioParse`, `ScenarioNotFound`,
