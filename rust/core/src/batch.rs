@@ -198,3 +198,146 @@ impl<L: Lane> Batch<L> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A lane that reaches its target after `reach` steps (never when 0) and writes its
+    /// step count as its own row.
+    #[derive(Debug, Clone)]
+    struct Counter {
+        steps: u32,
+        reach: u32,
+    }
+
+    struct Bufs<'a> {
+        rows: StepRows<'a>,
+        steps: &'a mut [u32],
+    }
+
+    impl Lane for Counter {
+        type Model = ();
+        type Buffers<'a> = Bufs<'a>;
+
+        fn reset(&mut self, _: &()) {
+            self.steps = 0;
+        }
+        fn steps(&self) -> u32 {
+            self.steps
+        }
+        fn check_buffers(_: &(), n: usize, b: &Bufs<'_>) -> Result<()> {
+            if b.steps.len() == n && b.rows.rewards.len() == n {
+                Ok(())
+            } else {
+                Err(Error::argument("steps", b.steps.len(), "one per lane"))
+            }
+        }
+        fn step_rows<'b>(b: &'b mut Bufs<'_>) -> StepRows<'b> {
+            StepRows {
+                rewards: b.rows.rewards,
+                terminated: b.rows.terminated,
+                truncated: b.rows.truncated,
+                detour_penalty: b.rows.detour_penalty,
+            }
+        }
+        fn write(&self, _: &(), i: usize, b: &mut Bufs<'_>) {
+            b.steps[i] = self.steps;
+        }
+    }
+
+    /// Lane 0 reaches its target at its 2nd step, lane 1 never does (cap 3): each ends,
+    /// then the next step resets it (reward 0, neither flag) whatever its action.
+    #[test]
+    fn lanes_end_then_reset_at_the_next_step() {
+        let mut batch = Batch::from_lane(Arc::new(()), Counter { steps: 0, reach: 0 }, 2, 3);
+        batch.episodes_mut()[0].reach = 2;
+        let (mut r, mut te, mut tr, mut dp, mut st) = (
+            vec![9.0; 2],
+            vec![true; 2],
+            vec![true; 2],
+            vec![9.0; 2],
+            vec![9; 2],
+        );
+        macro_rules! bufs {
+            () => {
+                Bufs {
+                    rows: StepRows {
+                        rewards: &mut r,
+                        terminated: &mut te,
+                        truncated: &mut tr,
+                        detour_penalty: &mut dp,
+                    },
+                    steps: &mut st,
+                }
+            };
+        }
+        batch.reset(Some(&[false, true]), bufs!()).unwrap();
+        assert_eq!(
+            (r[0], te[0], st[0]),
+            (9.0, true, 9),
+            "masked-out lane untouched"
+        );
+        assert_eq!(
+            (r[1], te[1], tr[1], dp[1], st[1]),
+            (0.0, false, false, 0.0, 0)
+        );
+        assert!(batch.reset(Some(&[true]), bufs!()).is_err());
+        let step = |batch: &mut Batch<Counter>, b: Bufs<'_>| {
+            batch.step_checked(b, |lane, _, i| {
+                lane.steps += 1;
+                LaneStep {
+                    reward: -1.0 - i as f64,
+                    reached: lane.steps == lane.reach,
+                    detour_penalty: -0.5,
+                }
+            })
+        };
+        // Lane 0 was never reset: its first step is the autoreset.
+        let mut seen = Vec::new();
+        for _ in 0..6 {
+            step(&mut batch, bufs!());
+            seen.push((st.clone(), te.clone(), tr.clone(), r.clone()));
+        }
+        let want = [
+            (
+                vec![0, 1],
+                vec![false, false],
+                vec![false, false],
+                vec![0.0, -2.0],
+            ),
+            (
+                vec![1, 2],
+                vec![false, false],
+                vec![false, false],
+                vec![-1.0, -2.0],
+            ),
+            (
+                vec![2, 3],
+                vec![true, false],
+                vec![false, true],
+                vec![-1.0, -2.0],
+            ),
+            (
+                vec![0, 0],
+                vec![false, false],
+                vec![false, false],
+                vec![0.0, 0.0],
+            ),
+            (
+                vec![1, 1],
+                vec![false, false],
+                vec![false, false],
+                vec![-1.0, -2.0],
+            ),
+            (
+                vec![2, 2],
+                vec![true, false],
+                vec![false, false],
+                vec![-1.0, -2.0],
+            ),
+        ];
+        assert_eq!(seen, want);
+        assert_eq!(dp, vec![-0.5, -0.5]);
+    }
+}
