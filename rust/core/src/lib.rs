@@ -22,6 +22,10 @@
 //! - [`names`] — scenario names: files, built-ins, `generated:SEED`, `generated:A..B` lists.
 //! - [`export`] — the arm as URDF, the arm and its world as a MuJoCo MJCF scene.
 //! - [`mod@env`] — RL environment logic: episodes, observations, batched envs (for Python).
+//! - [`joint_env`] — the joint-space environment: continuous actions checked by the exact
+//!   capsule clearance.
+//! - [`batch`] — N episodes stepped together (next-step autoreset, step cap): the one batch
+//!   logic of both envs.
 //! - [`error`] — the one error type; [`io`] — atomic file output; [`host`] — the
 //!   machine description of reports.
 //!
@@ -41,6 +45,7 @@
 
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod clearance;
 pub mod env;
 pub mod error;

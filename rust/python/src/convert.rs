@@ -343,3 +343,46 @@ pub fn cell(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Cell> {
     }
     Ok(c)
 }
+
+/// A `T` array of shape `(n, 3)` (goals, one row each), flattened row-major, and its `n`;
+/// any other value is refused with `reason` naming what `name` must be.
+pub fn goal_rows<T: numpy::Element + Copy>(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    reason: &str,
+) -> PyResult<(Vec<T>, usize)> {
+    use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
+    let bad = || invalid_argument(py, name, repr(obj), reason);
+    let arr: PyReadonlyArray2<'_, T> = obj.extract().map_err(|_| bad())?;
+    if arr.shape()[1] != 3 {
+        return Err(bad());
+    }
+    Ok((arr.as_array().iter().copied().collect(), arr.shape()[0]))
+}
+
+/// A one-dimensional `T` array (`what` names the dtype) of `n` values, `per` saying what
+/// each one belongs to (`"one per transition"`).
+pub fn column<'py, T: numpy::Element + Copy>(
+    py: Python<'_>,
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    what: &str,
+    n: usize,
+    per: &str,
+) -> PyResult<Vec<T>> {
+    use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
+    let bad = || {
+        invalid_argument(
+            py,
+            name,
+            repr(obj),
+            format!("must be a {what} array of shape ({n},), {per}"),
+        )
+    };
+    let arr: PyReadonlyArray1<'py, T> = obj.extract().map_err(|_| bad())?;
+    if arr.len() != n {
+        return Err(bad());
+    }
+    Ok(arr.as_array().to_vec())
+}

@@ -3,9 +3,7 @@
 
 use std::sync::Arc;
 
-use numpy::{
-    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
-};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -15,9 +13,10 @@ use sixaxis_core::env::{
 use sixaxis_core::grid::Assist;
 use sixaxis_core::{Cell, Scenario};
 
-use crate::convert::{bounded_vec, cell, repr};
-use crate::errors::{invalid_argument, run, run_attached};
+use crate::convert::{bounded_vec, cell, column, goal_rows, repr};
+use crate::errors::{invalid_argument, run_attached};
 use crate::scenario::{scenario_from_any, PyScenario};
+use crate::vec_core::{call, impl_block, row_major, vec_pymethods, NumpyBuffers, StepArrays};
 
 /// Which observation the engine produces.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -71,45 +70,12 @@ fn build_model(
 
 /// A float64 array of shape ``(n, 3)`` (goals), flattened row-major, and its `n`.
 fn goals_arg(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<f64>, usize)> {
-    let bad = || {
-        invalid_argument(
-            py,
-            name,
-            repr(obj),
-            "must be a float64 array of shape (n, 3) (normalised cells, one row per goal)",
-        )
-    };
-    let arr: PyReadonlyArray2<'_, f64> = obj.extract().map_err(|_| bad())?;
-    if arr.shape()[1] != 3 {
-        return Err(bad());
-    }
-    Ok((arr.as_array().iter().copied().collect(), arr.shape()[0]))
-}
-
-/// A one-dimensional array of `n` values (`what` names the dtype).
-fn column_arg<'py, T>(
-    py: Python<'_>,
-    obj: &Bound<'py, PyAny>,
-    name: &str,
-    what: &str,
-    n: usize,
-) -> PyResult<Vec<T>>
-where
-    T: numpy::Element + Copy,
-{
-    let bad = || {
-        invalid_argument(
-            py,
-            name,
-            repr(obj),
-            format!("must be a {what} array of shape ({n},), one per goal pair"),
-        )
-    };
-    let arr: PyReadonlyArray1<'py, T> = obj.extract().map_err(|_| bad())?;
-    if arr.len() != n {
-        return Err(bad());
-    }
-    Ok(arr.as_array().to_vec())
+    goal_rows(
+        py,
+        obj,
+        name,
+        "must be a float64 array of shape (n, 3) (normalised cells, one row per goal)",
+    )
 }
 
 /// ``EnvModel::goal_rewards`` over NumPy arrays (the ``compute_reward`` of both engines).
@@ -131,8 +97,9 @@ fn goal_rewards<'py>(
             format!("must have the shape of achieved_goal ({n}, 3)"),
         ));
     }
-    let c: Vec<bool> = column_arg(py, collided, "collided", "bool", n)?;
-    let p: Vec<f64> = column_arg(py, detour_penalty, "detour_penalty", "float64", n)?;
+    let per = "one per goal pair";
+    let c: Vec<bool> = column(py, collided, "collided", "bool", n, per)?;
+    let p: Vec<f64> = column(py, detour_penalty, "detour_penalty", "float64", n, per)?;
     let r = run_attached(py, || model.goal_rewards(&a, &d, &c, &p))?;
     Ok(PyArray1::from_vec(py, r))
 }
@@ -447,285 +414,259 @@ impl PyEnvCore {
 #[pyclass(name = "VecEnvCore", module = "sixaxis_avoid._core")]
 pub struct PyVecEnvCore {
     batch: BatchEnv,
+    arrays: GridArrays,
+}
+
+/// The arrays a `VecEnvCore` lends to its batch ([`BatchBuffers`]).
+struct GridArrays {
     obs: ObsKind,
     obs_buf: Py<PyAny>,
-    rewards: Py<PyArray1<f64>>,
-    terminated: Py<PyArray1<bool>>,
-    truncated: Py<PyArray1<bool>>,
+    step: StepArrays,
     collided: Py<PyArray1<bool>>,
     distance: Py<PyArray1<f64>>,
     cells: Py<PyArray2<i32>>,
-    detour: Py<PyArray1<f64>>,
 }
 
-macro_rules! with_buffers {
-    ($self:ident, $py:ident, |$bufs:ident| $body:expr) => {{
-        let mut rw_r = $self.rewards.bind($py).try_readwrite()?;
-        let mut rw_te = $self.terminated.bind($py).try_readwrite()?;
-        let mut rw_tr = $self.truncated.bind($py).try_readwrite()?;
-        let mut rw_co = $self.collided.bind($py).try_readwrite()?;
-        let mut rw_d = $self.distance.bind($py).try_readwrite()?;
-        let mut rw_c = $self.cells.bind($py).try_readwrite()?;
-        let mut rw_dp = $self.detour.bind($py).try_readwrite()?;
-        let obs_any = $self.obs_buf.bind($py);
-        let mut rw_of;
-        let mut rw_oi;
-        let obs = match $self.obs {
+impl NumpyBuffers for GridArrays {
+    type Lane = Episode;
+
+    fn step_arrays(&self) -> &StepArrays {
+        &self.step
+    }
+
+    fn lend<F>(&self, py: Python<'_>, f: F) -> PyResult<()>
+    where
+        F: for<'b> FnOnce(BatchBuffers<'b>) -> PyResult<()>,
+    {
+        let mut step = self.step.lease(py)?;
+        let mut co = self.collided.bind(py).try_readwrite()?;
+        let mut d = self.distance.bind(py).try_readwrite()?;
+        let mut c = self.cells.bind(py).try_readwrite()?;
+        let obs_any = self.obs_buf.bind(py);
+        let mut of;
+        let mut oi;
+        let obs = match self.obs {
             ObsKind::Vector => {
-                rw_of = obs_any.cast::<PyArray2<f32>>()?.try_readwrite()?;
-                ObsBuffer::Vector(rw_of.as_slice_mut()?)
+                of = obs_any.cast::<PyArray2<f32>>()?.try_readwrite()?;
+                ObsBuffer::Vector(of.as_slice_mut()?)
             }
             ObsKind::Index => {
-                rw_oi = obs_any.cast::<PyArray1<i64>>()?.try_readwrite()?;
-                ObsBuffer::Index(rw_oi.as_slice_mut()?)
+                oi = obs_any.cast::<PyArray1<i64>>()?.try_readwrite()?;
+                ObsBuffer::Index(oi.as_slice_mut()?)
             }
         };
-        let $bufs = BatchBuffers {
+        let rows = step.rows()?;
+        f(BatchBuffers {
             obs,
-            rewards: rw_r.as_slice_mut()?,
-            terminated: rw_te.as_slice_mut()?,
-            truncated: rw_tr.as_slice_mut()?,
-            collided: rw_co.as_slice_mut()?,
-            distance: rw_d.as_slice_mut()?,
-            cells: rw_c.as_slice_mut()?,
-            detour_penalty: rw_dp.as_slice_mut()?,
-        };
-        $body
-    }};
-}
-
-#[pymethods]
-impl PyVecEnvCore {
-    #[new]
-    #[pyo3(signature = (scenario=None, *, num_envs, max_episode_steps, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn py_new(
-        py: Python<'_>,
-        scenario: Option<&Bound<'_, PyAny>>,
-        num_envs: i64,
-        max_episode_steps: i64,
-        obs: &str,
-        assist: Option<&Bound<'_, PyAny>>,
-        reward_scale: f64,
-        random_target: bool,
-        extra_obstacles: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Self> {
-        let obs = obs_kind(py, obs)?;
-        if !(1..=(1 << 24)).contains(&num_envs) {
-            return Err(invalid_argument(
-                py,
-                "num_envs",
-                num_envs,
-                "must be in 1..=16777216",
-            ));
-        }
-        if !(1..=u32::MAX as i64).contains(&max_episode_steps) {
-            return Err(invalid_argument(
-                py,
-                "max_episode_steps",
-                max_episode_steps,
-                "must be a positive integer",
-            ));
-        }
-        let n = num_envs as usize;
-        let (_, model) = build_model(
-            py,
-            scenario,
-            assist,
-            reward_scale,
-            random_target,
-            extra_obstacles,
-        )?;
-        let batch = run_attached(py, || BatchEnv::new(model, n, max_episode_steps as u32))?;
-        let obs_buf = match obs {
-            ObsKind::Vector => PyArray2::<f32>::zeros(py, [n, VECTOR_OBS_DIM], false).into_any(),
-            ObsKind::Index => PyArray1::<i64>::zeros(py, n, false).into_any(),
-        };
-        Ok(PyVecEnvCore {
-            batch,
-            obs,
-            obs_buf: obs_buf.unbind(),
-            rewards: PyArray1::zeros(py, n, false).unbind(),
-            terminated: PyArray1::from_vec(py, vec![false; n]).unbind(),
-            truncated: PyArray1::from_vec(py, vec![false; n]).unbind(),
-            collided: PyArray1::from_vec(py, vec![false; n]).unbind(),
-            distance: PyArray1::zeros(py, n, false).unbind(),
-            cells: PyArray2::zeros(py, [n, 3], false).unbind(),
-            detour: PyArray1::zeros(py, n, false).unbind(),
+            rewards: rows.rewards,
+            terminated: rows.terminated,
+            truncated: rows.truncated,
+            collided: co.as_slice_mut()?,
+            distance: d.as_slice_mut()?,
+            cells: c.as_slice_mut()?,
+            detour_penalty: rows.detour_penalty,
         })
     }
-
-    /// Seed each env's generator of random targets (one seed per env).
-    fn seed(&mut self, py: Python<'_>, seeds: &Bound<'_, PyAny>) -> PyResult<()> {
-        let seeds: Vec<u64> = bounded_vec(seeds, self.batch.len() + 1).ok_or_else(|| {
-            invalid_argument(
-                py,
-                "seed",
-                repr(seeds),
-                format!("must be {} integers in 0..2**64", self.batch.len()),
-            )
-        })?;
-        run_attached(py, || self.batch.seed(&seeds))
-    }
-
-    /// Reset the envs where `mask` is true (all if None), writing into the buffers.
-    #[pyo3(signature = (mask=None))]
-    fn reset(&mut self, py: Python<'_>, mask: Option<PyReadonlyArray1<'_, bool>>) -> PyResult<()> {
-        let mask_vec: Option<Vec<bool>> = mask.map(|m| m.as_array().to_vec());
-        let batch = &mut self.batch;
-        with_buffers!(self, py, |bufs| run(py, || batch
-            .reset(mask_vec.as_deref(), bufs)))
-    }
-
-    /// Step all envs with `actions` (int64, one per env), writing into the buffers; the GIL
-    /// is released meanwhile.
-    fn step(&mut self, py: Python<'_>, actions: PyReadonlyArray1<'_, i64>) -> PyResult<()> {
-        if actions.len() != self.batch.len() {
-            return Err(invalid_argument(
-                py,
-                "actions",
-                format!("array of shape {:?}", actions.shape()),
-                format!("must have shape ({},)", self.batch.len()),
-            ));
-        }
-        let owned;
-        let acts: &[i64] = match actions.as_slice() {
-            Ok(s) => s,
-            Err(_) => {
-                owned = actions.as_array().to_vec();
-                &owned
-            }
-        };
-        let batch = &mut self.batch;
-        with_buffers!(self, py, |bufs| run(py, || batch.step(acts, bufs)))
-    }
-
-    #[getter]
-    fn num_envs(&self) -> usize {
-        self.batch.len()
-    }
-    #[getter]
-    fn num_states(&self) -> usize {
-        self.batch.model().num_states()
-    }
-    #[getter]
-    fn max_episode_steps(&self) -> u32 {
-        self.batch.max_episode_steps()
-    }
-    /// Observation buffer: ``(n, 13)`` float32 or ``(n,)`` int64.
-    #[getter]
-    fn observations(&self, py: Python<'_>) -> Py<PyAny> {
-        self.obs_buf.clone_ref(py)
-    }
-    #[getter]
-    fn rewards(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-        self.rewards.clone_ref(py)
-    }
-    #[getter]
-    fn terminated(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
-        self.terminated.clone_ref(py)
-    }
-    #[getter]
-    fn truncated(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
-        self.truncated.clone_ref(py)
-    }
-    #[getter]
-    fn collided(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
-        self.collided.clone_ref(py)
-    }
-    #[getter]
-    fn distance_to_target(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-        self.distance.clone_ref(py)
-    }
-    #[getter]
-    fn cells(&self, py: Python<'_>) -> Py<PyArray2<i32>> {
-        self.cells.clone_ref(py)
-    }
-    /// Eq. 9's part of each env's last reward, before ``reward_scale`` (0 after a reset).
-    #[getter]
-    fn detour_penalty(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-        self.detour.clone_ref(py)
-    }
-    /// Steps since the reset, per env.
-    #[getter]
-    fn steps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        PyArray1::from_iter(py, self.batch.episodes().iter().map(|e| e.steps()))
-    }
-    /// The candidate targets: the cells random targets are drawn from (free, not the start).
-    #[getter]
-    fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        cell_tuples(py, &self.batch.model().target_candidates())
-    }
-    /// All obstacle centres: the scenario's, then the extra ones.
-    #[getter]
-    fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        cell_tuples(py, self.batch.model().world().obstacles())
-    }
-    /// The extra obstacles given at construction.
-    #[getter]
-    fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        cell_tuples(py, &self.batch.model().options().extra_obstacles)
-    }
-    /// The reward scale.
-    #[getter]
-    fn reward_scale(&self) -> f64 {
-        self.batch.model().options().reward_scale
-    }
-    /// Whether each reset draws a random target.
-    #[getter]
-    fn random_target(&self) -> bool {
-        self.batch.model().options().random_target
-    }
-    /// ``(detour, distance)``: which assisted-learning terms shape the reward.
-    #[getter]
-    fn assist(&self) -> (bool, bool) {
-        let a = self.batch.model().options().assist;
-        (a.detour, a.distance)
-    }
-    /// The cell of a state.
-    fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
-        cell_of_state(py, self.batch.model(), state)
-    }
-    /// The state of a cell, or None outside bounds.
-    fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
-        Ok(self.batch.model().world().state_of(cell(c, "cell")?))
-    }
-    /// As ``EnvCore.compute_reward`` (the envs share one model).
-    fn compute_reward<'py>(
-        &self,
-        py: Python<'py>,
-        achieved_goal: &Bound<'py, PyAny>,
-        desired_goal: &Bound<'py, PyAny>,
-        collided: &Bound<'py, PyAny>,
-        detour_penalty: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        goal_rewards(
-            py,
-            self.batch.model(),
-            achieved_goal,
-            desired_goal,
-            collided,
-            detour_penalty,
-        )
-    }
-    /// As ``EnvCore.goal_to_cell``.
-    fn goal_to_cell<'py>(
-        &self,
-        py: Python<'py>,
-        goal: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<i64>>> {
-        goal_cells(py, self.batch.model(), goal)
-    }
-    /// Each env's current target cell, ``(n, 3)``.
-    #[getter]
-    fn current_targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i32>>> {
-        let w = self.batch.model().world();
-        let v: Vec<Vec<i32>> = self
-            .batch
-            .episodes()
-            .iter()
-            .map(|e| w.cell_of(e.target()).to_vec())
-            .collect();
-        Ok(PyArray2::from_vec2(py, &v)?)
-    }
 }
+
+vec_pymethods!(
+    impl_block!(
+        #[pymethods]
+        PyVecEnvCore
+    ),
+    {
+        #[new]
+        #[pyo3(signature = (scenario=None, *, num_envs, max_episode_steps, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None))]
+        #[allow(clippy::too_many_arguments)]
+        fn py_new(
+            py: Python<'_>,
+            scenario: Option<&Bound<'_, PyAny>>,
+            num_envs: i64,
+            max_episode_steps: i64,
+            obs: &str,
+            assist: Option<&Bound<'_, PyAny>>,
+            reward_scale: f64,
+            random_target: bool,
+            extra_obstacles: Option<&Bound<'_, PyAny>>,
+        ) -> PyResult<Self> {
+            let obs = obs_kind(py, obs)?;
+            if !(1..=(1 << 24)).contains(&num_envs) {
+                return Err(invalid_argument(
+                    py,
+                    "num_envs",
+                    num_envs,
+                    "must be in 1..=16777216",
+                ));
+            }
+            if !(1..=u32::MAX as i64).contains(&max_episode_steps) {
+                return Err(invalid_argument(
+                    py,
+                    "max_episode_steps",
+                    max_episode_steps,
+                    "must be a positive integer",
+                ));
+            }
+            let n = num_envs as usize;
+            let (_, model) = build_model(
+                py,
+                scenario,
+                assist,
+                reward_scale,
+                random_target,
+                extra_obstacles,
+            )?;
+            let batch = run_attached(py, || BatchEnv::new(model, n, max_episode_steps as u32))?;
+            let obs_buf = match obs {
+                ObsKind::Vector => {
+                    PyArray2::<f32>::zeros(py, [n, VECTOR_OBS_DIM], false).into_any()
+                }
+                ObsKind::Index => PyArray1::<i64>::zeros(py, n, false).into_any(),
+            };
+            Ok(PyVecEnvCore {
+                batch,
+                arrays: GridArrays {
+                    obs,
+                    obs_buf: obs_buf.unbind(),
+                    step: StepArrays::new(py, n),
+                    collided: PyArray1::from_vec(py, vec![false; n]).unbind(),
+                    distance: PyArray1::zeros(py, n, false).unbind(),
+                    cells: PyArray2::zeros(py, [n, 3], false).unbind(),
+                },
+            })
+        }
+
+        /// Seed each env's generator of random targets (one seed per env).
+        fn seed(&mut self, py: Python<'_>, seeds: &Bound<'_, PyAny>) -> PyResult<()> {
+            let seeds: Vec<u64> = bounded_vec(seeds, self.batch.len() + 1).ok_or_else(|| {
+                invalid_argument(
+                    py,
+                    "seed",
+                    repr(seeds),
+                    format!("must be {} integers in 0..2**64", self.batch.len()),
+                )
+            })?;
+            run_attached(py, || self.batch.seed(&seeds))
+        }
+
+        /// Step all envs with `actions` (int64, one per env), writing into the buffers; the GIL
+        /// is released meanwhile.
+        fn step(&mut self, py: Python<'_>, actions: PyReadonlyArray1<'_, i64>) -> PyResult<()> {
+            if actions.len() != self.batch.len() {
+                return Err(invalid_argument(
+                    py,
+                    "actions",
+                    format!("array of shape {:?}", actions.shape()),
+                    format!("must have shape ({},)", self.batch.len()),
+                ));
+            }
+            let mut owned = Vec::new();
+            let acts = row_major(&actions, &mut owned);
+            call(py, &mut self.batch, &self.arrays, |b, bufs| {
+                b.step(acts, bufs)
+            })
+        }
+
+        #[getter]
+        fn num_states(&self) -> usize {
+            self.batch.model().num_states()
+        }
+        #[getter]
+        fn max_episode_steps(&self) -> u32 {
+            self.batch.max_episode_steps()
+        }
+        /// Observation buffer: ``(n, 13)`` float32 or ``(n,)`` int64.
+        #[getter]
+        fn observations(&self, py: Python<'_>) -> Py<PyAny> {
+            self.arrays.obs_buf.clone_ref(py)
+        }
+        #[getter]
+        fn collided(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
+            self.arrays.collided.clone_ref(py)
+        }
+        #[getter]
+        fn distance_to_target(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
+            self.arrays.distance.clone_ref(py)
+        }
+        #[getter]
+        fn cells(&self, py: Python<'_>) -> Py<PyArray2<i32>> {
+            self.arrays.cells.clone_ref(py)
+        }
+        /// The candidate targets: the cells random targets are drawn from (free, not the start).
+        #[getter]
+        fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+            cell_tuples(py, &self.batch.model().target_candidates())
+        }
+        /// All obstacle centres: the scenario's, then the extra ones.
+        #[getter]
+        fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+            cell_tuples(py, self.batch.model().world().obstacles())
+        }
+        /// The extra obstacles given at construction.
+        #[getter]
+        fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+            cell_tuples(py, &self.batch.model().options().extra_obstacles)
+        }
+        /// The reward scale.
+        #[getter]
+        fn reward_scale(&self) -> f64 {
+            self.batch.model().options().reward_scale
+        }
+        /// Whether each reset draws a random target.
+        #[getter]
+        fn random_target(&self) -> bool {
+            self.batch.model().options().random_target
+        }
+        /// ``(detour, distance)``: which assisted-learning terms shape the reward.
+        #[getter]
+        fn assist(&self) -> (bool, bool) {
+            let a = self.batch.model().options().assist;
+            (a.detour, a.distance)
+        }
+        /// The cell of a state.
+        fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
+            cell_of_state(py, self.batch.model(), state)
+        }
+        /// The state of a cell, or None outside bounds.
+        fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+            Ok(self.batch.model().world().state_of(cell(c, "cell")?))
+        }
+        /// As ``EnvCore.compute_reward`` (the envs share one model).
+        fn compute_reward<'py>(
+            &self,
+            py: Python<'py>,
+            achieved_goal: &Bound<'py, PyAny>,
+            desired_goal: &Bound<'py, PyAny>,
+            collided: &Bound<'py, PyAny>,
+            detour_penalty: &Bound<'py, PyAny>,
+        ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+            goal_rewards(
+                py,
+                self.batch.model(),
+                achieved_goal,
+                desired_goal,
+                collided,
+                detour_penalty,
+            )
+        }
+        /// As ``EnvCore.goal_to_cell``.
+        fn goal_to_cell<'py>(
+            &self,
+            py: Python<'py>,
+            goal: &Bound<'py, PyAny>,
+        ) -> PyResult<Bound<'py, PyArray2<i64>>> {
+            goal_cells(py, self.batch.model(), goal)
+        }
+        /// Each env's current target cell, ``(n, 3)``.
+        #[getter]
+        fn current_targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i32>>> {
+            let w = self.batch.model().world();
+            let v: Vec<Vec<i32>> = self
+                .batch
+                .episodes()
+                .iter()
+                .map(|e| w.cell_of(e.target()).to_vec())
+                .collect();
+            Ok(PyArray2::from_vec2(py, &v)?)
+        }
+    }
+);

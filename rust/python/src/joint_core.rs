@@ -17,9 +17,10 @@ use sixaxis_core::joint_env::{
 use sixaxis_core::options::OptionInfo;
 use sixaxis_core::Scenario;
 
-use crate::convert::repr;
+use crate::convert::{column, goal_rows, repr};
 use crate::errors::{invalid_argument, run, run_attached};
 use crate::scenario::{scenario_from_any, PyScenario};
+use crate::vec_core::{call, row_major, vec_pymethods, NumpyBuffers, StepArrays};
 
 fn build_model(
     py: Python<'_>,
@@ -61,41 +62,12 @@ fn action_of(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<[f64; 6]> {
 
 /// A float32 array of shape `(n, 3)` (goals), flattened, and its `n`.
 fn goals_arg(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(Vec<f32>, usize)> {
-    let bad = || {
-        invalid_argument(
-            py,
-            name,
-            repr(obj),
-            "must be a float32 array of shape (n, 3) (positions / reach, one row per transition)",
-        )
-    };
-    let arr: PyReadonlyArray2<'_, f32> = obj.extract().map_err(|_| bad())?;
-    if arr.shape()[1] != 3 {
-        return Err(bad());
-    }
-    Ok((arr.as_array().iter().copied().collect(), arr.shape()[0]))
-}
-
-fn column<'py, T: numpy::Element + Copy>(
-    py: Python<'_>,
-    obj: &Bound<'py, PyAny>,
-    name: &str,
-    what: &str,
-    n: usize,
-) -> PyResult<Vec<T>> {
-    let bad = || {
-        invalid_argument(
-            py,
-            name,
-            repr(obj),
-            format!("must be a {what} array of shape ({n},), one per transition"),
-        )
-    };
-    let arr: PyReadonlyArray1<'py, T> = obj.extract().map_err(|_| bad())?;
-    if arr.len() != n {
-        return Err(bad());
-    }
-    Ok(arr.as_array().to_vec())
+    goal_rows(
+        py,
+        obj,
+        name,
+        "must be a float32 array of shape (n, 3) (positions / reach, one row per transition)",
+    )
 }
 
 /// `JointModel::goal_rewards` over NumPy arrays (`compute_reward` of both engines).
@@ -121,8 +93,9 @@ fn goal_rewards<'py>(
             ));
         }
     }
-    let r: Vec<bool> = column(py, refused, "refused", "bool", n)?;
-    let dp: Vec<f64> = column(py, detour_penalty, "detour_penalty", "float64", n)?;
+    let per = "one per transition";
+    let r: Vec<bool> = column(py, refused, "refused", "bool", n, per)?;
+    let dp: Vec<f64> = column(py, detour_penalty, "detour_penalty", "float64", n, per)?;
     let out = run_attached(py, || model.goal_rewards(&p, &a, &d, &r, &dp))?;
     Ok(PyArray1::from_vec(py, out))
 }
@@ -468,53 +441,63 @@ joint_pymethods!(
 #[pyclass(name = "JointVecEnvCore", module = "sixaxis_avoid._core")]
 pub struct PyJointVecEnvCore {
     batch: JointBatch,
+    arrays: JointArrays,
+}
+
+/// The arrays a `JointVecEnvCore` lends to its batch ([`JointBuffers`]).
+struct JointArrays {
     obs: Py<PyArray2<f32>>,
-    rewards: Py<PyArray1<f64>>,
-    terminated: Py<PyArray1<bool>>,
-    truncated: Py<PyArray1<bool>>,
+    step: StepArrays,
     refused: Py<PyArray1<bool>>,
     distance: Py<PyArray1<f64>>,
     clearance: Py<PyArray1<f64>>,
-    detour: Py<PyArray1<f64>>,
     joints: Py<PyArray2<f64>>,
     terminal: Py<PyArray2<f64>>,
     previous_goal: Py<PyArray2<f32>>,
 }
 
-macro_rules! with_buffers {
-    ($self:ident, $py:ident, |$bufs:ident| $body:expr) => {{
-        let mut o = $self.obs.bind($py).try_readwrite()?;
-        let mut r = $self.rewards.bind($py).try_readwrite()?;
-        let mut te = $self.terminated.bind($py).try_readwrite()?;
-        let mut tr = $self.truncated.bind($py).try_readwrite()?;
-        let mut rf = $self.refused.bind($py).try_readwrite()?;
-        let mut d = $self.distance.bind($py).try_readwrite()?;
-        let mut c = $self.clearance.bind($py).try_readwrite()?;
-        let mut dp = $self.detour.bind($py).try_readwrite()?;
-        let mut j = $self.joints.bind($py).try_readwrite()?;
-        let mut t = $self.terminal.bind($py).try_readwrite()?;
-        let mut pg = $self.previous_goal.bind($py).try_readwrite()?;
-        let $bufs = JointBuffers {
+impl NumpyBuffers for JointArrays {
+    type Lane = JointEpisode;
+
+    fn step_arrays(&self) -> &StepArrays {
+        &self.step
+    }
+
+    fn lend<F>(&self, py: Python<'_>, f: F) -> PyResult<()>
+    where
+        F: for<'b> FnOnce(JointBuffers<'b>) -> PyResult<()>,
+    {
+        let mut o = self.obs.bind(py).try_readwrite()?;
+        let mut step = self.step.lease(py)?;
+        let mut rf = self.refused.bind(py).try_readwrite()?;
+        let mut d = self.distance.bind(py).try_readwrite()?;
+        let mut c = self.clearance.bind(py).try_readwrite()?;
+        let mut j = self.joints.bind(py).try_readwrite()?;
+        let mut t = self.terminal.bind(py).try_readwrite()?;
+        let mut pg = self.previous_goal.bind(py).try_readwrite()?;
+        let rows = step.rows()?;
+        f(JointBuffers {
             obs: o.as_slice_mut()?,
-            rewards: r.as_slice_mut()?,
-            terminated: te.as_slice_mut()?,
-            truncated: tr.as_slice_mut()?,
+            rewards: rows.rewards,
+            terminated: rows.terminated,
+            truncated: rows.truncated,
             refused: rf.as_slice_mut()?,
             distance_mm: d.as_slice_mut()?,
             clearance_mm: c.as_slice_mut()?,
-            detour_penalty: dp.as_slice_mut()?,
+            detour_penalty: rows.detour_penalty,
             joints: j.as_slice_mut()?,
             terminal_mm: t.as_slice_mut()?,
             previous_goal: pg.as_slice_mut()?,
-        };
-        $body
-    }};
+        })
+    }
 }
 
-joint_pymethods!(
-    #[pymethods]
-    PyJointVecEnvCore,
-    |s| &**s.batch.model(),
+vec_pymethods!(
+    joint_pymethods!(
+        #[pymethods]
+        PyJointVecEnvCore,
+        |s| &**s.batch.model()
+    ),
     {
         /// ``JointVecEnvCore(scenario=None, *, num_envs, options=None)`` (``options``: as
         /// ``JointEnvCore``'s; its ``max_episode_steps`` truncates here).
@@ -539,31 +522,17 @@ joint_pymethods!(
             let batch = run_attached(py, || JointBatch::new(model, n))?;
             Ok(PyJointVecEnvCore {
                 batch,
-                obs: PyArray2::zeros(py, [n, d], false).unbind(),
-                rewards: PyArray1::zeros(py, n, false).unbind(),
-                terminated: PyArray1::from_vec(py, vec![false; n]).unbind(),
-                truncated: PyArray1::from_vec(py, vec![false; n]).unbind(),
-                refused: PyArray1::from_vec(py, vec![false; n]).unbind(),
-                distance: PyArray1::zeros(py, n, false).unbind(),
-                clearance: PyArray1::zeros(py, n, false).unbind(),
-                detour: PyArray1::zeros(py, n, false).unbind(),
-                joints: PyArray2::zeros(py, [n, 6], false).unbind(),
-                terminal: PyArray2::zeros(py, [n, 3], false).unbind(),
-                previous_goal: PyArray2::zeros(py, [n, 3], false).unbind(),
+                arrays: JointArrays {
+                    obs: PyArray2::zeros(py, [n, d], false).unbind(),
+                    step: StepArrays::new(py, n),
+                    refused: PyArray1::from_vec(py, vec![false; n]).unbind(),
+                    distance: PyArray1::zeros(py, n, false).unbind(),
+                    clearance: PyArray1::zeros(py, n, false).unbind(),
+                    joints: PyArray2::zeros(py, [n, 6], false).unbind(),
+                    terminal: PyArray2::zeros(py, [n, 3], false).unbind(),
+                    previous_goal: PyArray2::zeros(py, [n, 3], false).unbind(),
+                },
             })
-        }
-
-        /// Reset the envs where ``mask`` is true (all if None), writing into the buffers.
-        #[pyo3(signature = (mask=None))]
-        fn reset(
-            &mut self,
-            py: Python<'_>,
-            mask: Option<PyReadonlyArray1<'_, bool>>,
-        ) -> PyResult<()> {
-            let mask_vec: Option<Vec<bool>> = mask.map(|m| m.as_array().to_vec());
-            let batch = &mut self.batch;
-            with_buffers!(self, py, |bufs| run(py, || batch
-                .reset(mask_vec.as_deref(), bufs)))
         }
 
         /// Step all envs with ``actions`` (float64 ``(num_envs, 6)``, each in [-1, 1]),
@@ -578,78 +547,47 @@ joint_pymethods!(
                     format!("must have shape ({n}, 6)"),
                 ));
             }
-            let owned;
-            let acts: &[f64] = match actions.as_slice() {
-                Ok(s) => s,
-                Err(_) => {
-                    owned = actions.as_array().iter().copied().collect::<Vec<f64>>();
-                    &owned
-                }
-            };
-            let batch = &mut self.batch;
-            with_buffers!(self, py, |bufs| run(py, || batch.step(acts, bufs)))
+            let mut owned = Vec::new();
+            let acts = row_major(&actions, &mut owned);
+            call(py, &mut self.batch, &self.arrays, |b, bufs| {
+                b.step(acts, bufs)
+            })
         }
 
-        #[getter]
-        fn num_envs(&self) -> usize {
-            self.batch.len()
-        }
         /// Observations ``(n, obs_dim)`` float32 (the buffer, overwritten by every call).
         #[getter]
         fn observations(&self, py: Python<'_>) -> Py<PyArray2<f32>> {
-            self.obs.clone_ref(py)
-        }
-        #[getter]
-        fn rewards(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-            self.rewards.clone_ref(py)
-        }
-        #[getter]
-        fn terminated(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
-            self.terminated.clone_ref(py)
-        }
-        #[getter]
-        fn truncated(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
-            self.truncated.clone_ref(py)
+            self.arrays.obs.clone_ref(py)
         }
         /// Whether each env's last step was refused.
         #[getter]
         fn refused(&self, py: Python<'_>) -> Py<PyArray1<bool>> {
-            self.refused.clone_ref(py)
+            self.arrays.refused.clone_ref(py)
         }
         /// Terminal-target distance, mm.
         #[getter]
         fn distance_to_target(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-            self.distance.clone_ref(py)
+            self.arrays.distance.clone_ref(py)
         }
         /// Smallest link capsule gap, mm.
         #[getter]
         fn clearance(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-            self.clearance.clone_ref(py)
-        }
-        /// Eq. 9's part of each env's last reward, before ``reward_scale`` (0 after a reset).
-        #[getter]
-        fn detour_penalty(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
-            self.detour.clone_ref(py)
+            self.arrays.clearance.clone_ref(py)
         }
         /// Joint angles, radians, ``(n, 6)``.
         #[getter]
         fn joints(&self, py: Python<'_>) -> Py<PyArray2<f64>> {
-            self.joints.clone_ref(py)
+            self.arrays.joints.clone_ref(py)
         }
         /// Terminal positions, mm, ``(n, 3)``.
         #[getter]
         fn terminal_mm(&self, py: Python<'_>) -> Py<PyArray2<f64>> {
-            self.terminal.clone_ref(py)
+            self.arrays.terminal.clone_ref(py)
         }
         /// The achieved goal before each env's last step, ``(n, 3)`` float32.
         #[getter]
         fn previous_achieved_goal(&self, py: Python<'_>) -> Py<PyArray2<f32>> {
-            self.previous_goal.clone_ref(py)
-        }
-        /// Steps since the reset, per env.
-        #[getter]
-        fn steps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-            PyArray1::from_iter(py, self.batch.episodes().iter().map(|e| e.steps()))
+            self.arrays.previous_goal.clone_ref(py)
         }
     }
 );

@@ -1,8 +1,9 @@
 //! `sixaxis_avoid._core`: thin PyO3 bindings over `sixaxis-core`.
 //!
 //! Everything of substance lives in the core (`sixaxis_core::env` holds the episode and
-//! batched-env logic); this crate converts arguments, maps errors (`errors`) and releases
-//! the GIL around long calls (`errors::run`).
+//! batched-env logic, `sixaxis_core::batch` the batch both envs share); this crate converts
+//! arguments, maps errors (`errors`) and releases the GIL around long calls (`errors::run`);
+//! the two native vector engines share their NumPy glue (`vec_core`).
 
 use pyo3::prelude::*;
 
@@ -21,6 +22,7 @@ mod serve;
 mod tables;
 mod train;
 mod util;
+mod vec_core;
 
 /// Raise the Python exception of one core error variant (for the tests of the mapping).
 /// `kind` is the variant's name: `InvalidScenario`, `ScenarioParse`, `ScenarioNotFound`,

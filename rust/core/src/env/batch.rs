@@ -1,10 +1,12 @@
-//! N episodes stepped together ([`BatchEnv`]) with next-step autoreset and a step cap, into
-//! caller-provided buffers ([`BatchBuffers`]): borrowed from numpy arrays by the bindings, or
-//! from an owned [`BatchOutputs`] (the server, the tables' checks, tests).
+//! N episodes stepped together ([`BatchEnv`], the grid env's instance of
+//! [`crate::batch::Batch`]: next-step autoreset and a step cap), into caller-provided
+//! buffers ([`BatchBuffers`]): borrowed from numpy arrays by the bindings, or from an owned
+//! [`BatchOutputs`] (the server, the tables' checks, tests).
 
 use std::sync::Arc;
 
 use super::{EnvModel, Episode, NUM_ENVS, VECTOR_OBS_DIM};
+use crate::batch::{Batch, Lane, LaneStep, StepRows};
 use crate::error::{Error, Result};
 use crate::grid::NUM_ACTIONS;
 use crate::options::{check_value, Domain, OptionValue};
@@ -138,75 +140,23 @@ impl BatchOutputs {
     }
 }
 
-/// N environments stepped together, with next-step autoreset and a step cap.
-#[derive(Debug)]
-pub struct BatchEnv {
-    model: Arc<EnvModel>,
-    episodes: Vec<Episode>,
-    needs_reset: Vec<bool>,
-    max_episode_steps: u32,
-}
+/// N environments stepped together, with next-step autoreset and a step cap: the
+/// [`Batch`] of grid [`Episode`]s (its semantics: [`crate::batch`]).
+pub type BatchEnv = Batch<Episode>;
 
-impl BatchEnv {
-    /// `n` environments of `model`, truncated after `max_episode_steps` steps.
-    pub fn new(model: Arc<EnvModel>, n: usize, max_episode_steps: u32) -> Result<BatchEnv> {
-        check_value("num_envs", &NUM_ENVS, &OptionValue::Int(n as i128))?;
-        check_value(
-            "max_episode_steps",
-            &Domain::u32_from(1),
-            &OptionValue::Int(max_episode_steps as i128),
-        )?;
-        let ep = Episode::new(&model);
-        Ok(BatchEnv {
-            episodes: vec![ep; n],
-            needs_reset: vec![true; n],
-            model,
-            max_episode_steps,
-        })
+impl Lane for Episode {
+    type Model = EnvModel;
+    type Buffers<'a> = BatchBuffers<'a>;
+
+    fn reset(&mut self, model: &EnvModel) {
+        Episode::reset(self, model);
     }
 
-    /// Number of environments.
-    pub fn len(&self) -> usize {
-        self.episodes.len()
+    fn steps(&self) -> u32 {
+        self.steps
     }
 
-    /// Always false (a batch has at least one env).
-    pub fn is_empty(&self) -> bool {
-        self.episodes.is_empty()
-    }
-
-    /// The shared model.
-    pub fn model(&self) -> &Arc<EnvModel> {
-        &self.model
-    }
-
-    /// The episodes.
-    pub fn episodes(&self) -> &[Episode] {
-        &self.episodes
-    }
-
-    /// The step cap.
-    pub fn max_episode_steps(&self) -> u32 {
-        self.max_episode_steps
-    }
-
-    /// Seed env `i`'s generator (random targets).
-    pub fn seed(&mut self, seeds: &[u64]) -> Result<()> {
-        if seeds.len() != self.len() {
-            return Err(Error::argument(
-                "seeds",
-                format!("{} seeds", seeds.len()),
-                format!("expected one per env ({})", self.len()),
-            ));
-        }
-        for (ep, &s) in self.episodes.iter_mut().zip(seeds) {
-            ep.seed(s);
-        }
-        Ok(())
-    }
-
-    fn check(&self, buf: &BatchBuffers<'_>) -> Result<()> {
-        let n = self.len();
+    fn check_buffers(_: &EnvModel, n: usize, buf: &BatchBuffers<'_>) -> Result<()> {
         let obs_ok = match &buf.obs {
             ObsBuffer::Vector(o) => o.len() == n * VECTOR_OBS_DIM,
             ObsBuffer::Index(o) => o.len() == n,
@@ -231,55 +181,61 @@ impl BatchEnv {
     }
 
     #[inline]
-    fn write(&self, i: usize, buf: &mut BatchBuffers<'_>) {
-        let ep = &self.episodes[i];
-        let m = &*self.model;
+    fn step_rows<'b>(buf: &'b mut BatchBuffers<'_>) -> StepRows<'b> {
+        StepRows {
+            rewards: buf.rewards,
+            terminated: buf.terminated,
+            truncated: buf.truncated,
+            detour_penalty: buf.detour_penalty,
+        }
+    }
+
+    #[inline]
+    fn write(&self, m: &EnvModel, i: usize, buf: &mut BatchBuffers<'_>) {
         match &mut buf.obs {
             ObsBuffer::Vector(o) => {
-                ep.write_vector_obs(m, &mut o[i * VECTOR_OBS_DIM..(i + 1) * VECTOR_OBS_DIM])
+                self.write_vector_obs(m, &mut o[i * VECTOR_OBS_DIM..(i + 1) * VECTOR_OBS_DIM])
             }
-            ObsBuffer::Index(o) => o[i] = ep.state as i64,
+            ObsBuffer::Index(o) => o[i] = self.state as i64,
         }
-        buf.distance[i] = ep.distance_to_target(m);
-        let c = m.world.cell_of(ep.state as usize);
+        buf.distance[i] = self.distance_to_target(m);
+        let c = m.world.cell_of(self.state as usize);
         buf.cells[3 * i..3 * i + 3].copy_from_slice(&c);
-        buf.collided[i] = ep.collided;
+        buf.collided[i] = self.collided;
+    }
+}
+
+impl Batch<Episode> {
+    /// `n` environments of `model`, truncated after `max_episode_steps` steps.
+    pub fn new(model: Arc<EnvModel>, n: usize, max_episode_steps: u32) -> Result<BatchEnv> {
+        check_value("num_envs", &NUM_ENVS, &OptionValue::Int(n as i128))?;
+        check_value(
+            "max_episode_steps",
+            &Domain::u32_from(1),
+            &OptionValue::Int(max_episode_steps as i128),
+        )?;
+        let ep = Episode::new(&model);
+        Ok(Batch::from_lane(model, ep, n, max_episode_steps))
     }
 
-    fn reset_one(&mut self, i: usize, buf: &mut BatchBuffers<'_>) {
-        self.episodes[i].reset(&self.model);
-        self.needs_reset[i] = false;
-        buf.rewards[i] = 0.0;
-        buf.terminated[i] = false;
-        buf.truncated[i] = false;
-        buf.detour_penalty[i] = 0.0;
-        self.write(i, buf);
-    }
-
-    /// Reset the envs where `mask` is true (all if `None`) and write their observations.
-    /// Entries of other envs are left as they were.
-    pub fn reset(&mut self, mask: Option<&[bool]>, mut buf: BatchBuffers<'_>) -> Result<()> {
-        self.check(&buf)?;
-        if let Some(m) = mask {
-            if m.len() != self.len() {
-                return Err(Error::argument(
-                    "reset_mask",
-                    format!("{} entries", m.len()),
-                    format!("expected one per env ({})", self.len()),
-                ));
-            }
+    /// Seed env `i`'s generator (random targets).
+    pub fn seed(&mut self, seeds: &[u64]) -> Result<()> {
+        if seeds.len() != self.len() {
+            return Err(Error::argument(
+                "seeds",
+                format!("{} seeds", seeds.len()),
+                format!("expected one per env ({})", self.len()),
+            ));
         }
-        for i in 0..self.len() {
-            if mask.is_none_or(|m| m[i]) {
-                self.reset_one(i, &mut buf);
-            }
+        for (ep, &s) in self.episodes_mut().iter_mut().zip(seeds) {
+            ep.seed(s);
         }
         Ok(())
     }
 
     /// Step every env with its action (each < 6, all checked before any env moves). Envs
     /// whose episode ended at the previous step are reset instead (next-step autoreset).
-    pub fn step<A>(&mut self, actions: &[A], mut buf: BatchBuffers<'_>) -> Result<()>
+    pub fn step<A>(&mut self, actions: &[A], buf: BatchBuffers<'_>) -> Result<()>
     where
         A: Copy + TryInto<usize> + std::fmt::Display,
     {
@@ -304,23 +260,14 @@ impl BatchEnv {
                 }
             }
         }
-        let model = Arc::clone(&self.model);
-        for (i, &action) in actions.iter().enumerate() {
-            if self.needs_reset[i] {
-                self.reset_one(i, &mut buf);
-                continue;
+        self.step_checked(buf, |ep, model, i| {
+            let out = ep.step(model, actions[i].try_into().unwrap_or(0));
+            LaneStep {
+                reward: out.reward,
+                reached: out.reached,
+                detour_penalty: out.detour_penalty,
             }
-            let a = action.try_into().unwrap_or(0);
-            let ep = &mut self.episodes[i];
-            let out = ep.step(&model, a);
-            let truncated = !out.reached && ep.steps >= self.max_episode_steps;
-            buf.rewards[i] = out.reward;
-            buf.terminated[i] = out.reached;
-            buf.truncated[i] = truncated;
-            buf.detour_penalty[i] = out.detour_penalty;
-            self.needs_reset[i] = out.reached || truncated;
-            self.write(i, &mut buf);
-        }
+        });
         Ok(())
     }
 }

@@ -50,7 +50,8 @@
 //!   terminates nor truncates.
 //!
 //! The module's parts: the model and the env keywords here, one running episode in
-//! `env/episode.rs`, the batch in `env/batch.rs`; both re-exported.
+//! `env/episode.rs`, the batch in `env/batch.rs` (the grid's instance of
+//! [`crate::batch::Batch`]); both re-exported.
 
 use crate::error::{Error, Result};
 use crate::grid::{base_reward_of, cell_distance, Assist, GridWorld, NUM_ACTIONS};

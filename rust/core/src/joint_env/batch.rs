@@ -1,10 +1,11 @@
-//! N joint-space episodes stepped together ([`JointBatch`]) with next-step autoreset and a
-//! step cap, into caller-provided buffers ([`JointBuffers`]); the conventions of
-//! [`crate::env::BatchEnv`].
+//! N joint-space episodes stepped together ([`JointBatch`], the joint env's instance of
+//! [`crate::batch::Batch`]: next-step autoreset and a step cap), into caller-provided
+//! buffers ([`JointBuffers`]).
 
 use std::sync::Arc;
 
 use super::{JointEpisode, JointModel, JOINT_ENV_OPTIONS};
+use crate::batch::{Batch, Lane, LaneStep, StepRows};
 use crate::error::{Error, Result};
 use crate::options::{check_value, OptionValue};
 
@@ -36,53 +37,24 @@ pub struct JointBuffers<'a> {
 }
 
 /// N joint-space envs stepped together, with next-step autoreset and a step cap
-/// (`max_episode_steps` of the model's options).
-#[derive(Debug)]
-pub struct JointBatch {
-    model: Arc<JointModel>,
-    episodes: Vec<JointEpisode>,
-    needs_reset: Vec<bool>,
-}
+/// (`max_episode_steps` of the model's options): the [`Batch`] of [`JointEpisode`]s (its
+/// semantics: [`crate::batch`]).
+pub type JointBatch = Batch<JointEpisode>;
 
-impl JointBatch {
-    /// `n` envs of `model` (`n` in `num_envs`' domain of [`JOINT_ENV_OPTIONS`]).
-    pub fn new(model: Arc<JointModel>, n: usize) -> Result<JointBatch> {
-        let info = JOINT_ENV_OPTIONS
-            .iter()
-            .find(|i| i.key == "num_envs")
-            .expect("in the table");
-        check_value("num_envs", &info.domain, &OptionValue::Int(n as i128))?;
-        let ep = JointEpisode::new(&model);
-        Ok(JointBatch {
-            episodes: vec![ep; n],
-            needs_reset: vec![true; n],
-            model,
-        })
+impl Lane for JointEpisode {
+    type Model = JointModel;
+    type Buffers<'a> = JointBuffers<'a>;
+
+    fn reset(&mut self, model: &JointModel) {
+        JointEpisode::reset(self, model);
     }
 
-    /// Number of envs.
-    pub fn len(&self) -> usize {
-        self.episodes.len()
+    fn steps(&self) -> u32 {
+        JointEpisode::steps(self)
     }
 
-    /// Always false (a batch has at least one env).
-    pub fn is_empty(&self) -> bool {
-        self.episodes.is_empty()
-    }
-
-    /// The shared model.
-    pub fn model(&self) -> &Arc<JointModel> {
-        &self.model
-    }
-
-    /// The episodes.
-    pub fn episodes(&self) -> &[JointEpisode] {
-        &self.episodes
-    }
-
-    fn check(&self, b: &JointBuffers<'_>) -> Result<()> {
-        let n = self.len();
-        let d = self.model.obs_dim();
+    fn check_buffers(model: &JointModel, n: usize, b: &JointBuffers<'_>) -> Result<()> {
+        let d = model.obs_dim();
         let lengths = [
             ("obs", b.obs.len(), n * d),
             ("rewards", b.rewards.len(), n),
@@ -109,55 +81,46 @@ impl JointBatch {
     }
 
     #[inline]
-    fn write(&self, i: usize, b: &mut JointBuffers<'_>) {
-        let ep = &self.episodes[i];
-        let m = &*self.model;
+    fn step_rows<'b>(b: &'b mut JointBuffers<'_>) -> StepRows<'b> {
+        StepRows {
+            rewards: b.rewards,
+            terminated: b.terminated,
+            truncated: b.truncated,
+            detour_penalty: b.detour_penalty,
+        }
+    }
+
+    #[inline]
+    fn write(&self, m: &JointModel, i: usize, b: &mut JointBuffers<'_>) {
         let d = m.obs_dim();
-        ep.write_obs(m, &mut b.obs[i * d..(i + 1) * d]);
-        b.refused[i] = ep.refused();
-        b.distance_mm[i] = ep.distance_to_target_mm(m);
-        b.clearance_mm[i] = ep.clearance_mm(m);
-        b.joints[6 * i..6 * i + 6].copy_from_slice(&ep.joints_rad());
-        let t = ep.terminal_mm();
+        self.write_obs(m, &mut b.obs[i * d..(i + 1) * d]);
+        b.refused[i] = self.refused();
+        b.distance_mm[i] = self.distance_to_target_mm(m);
+        b.clearance_mm[i] = self.clearance_mm(m);
+        b.joints[6 * i..6 * i + 6].copy_from_slice(&self.joints_rad());
+        let t = self.terminal_mm();
         b.terminal_mm[3 * i..3 * i + 3].copy_from_slice(&[t.x, t.y, t.z]);
-        b.previous_goal[3 * i..3 * i + 3].copy_from_slice(&ep.previous_goal());
+        b.previous_goal[3 * i..3 * i + 3].copy_from_slice(&self.previous_goal());
     }
+}
 
-    fn reset_one(&mut self, i: usize, b: &mut JointBuffers<'_>) {
-        self.episodes[i].reset(&self.model);
-        self.needs_reset[i] = false;
-        b.rewards[i] = 0.0;
-        b.terminated[i] = false;
-        b.truncated[i] = false;
-        b.detour_penalty[i] = 0.0;
-        self.write(i, b);
-    }
-
-    /// Reset the lanes where `mask` is true (all if `None`) and write their entries; the
-    /// other lanes' entries are left as they were.
-    pub fn reset(&mut self, mask: Option<&[bool]>, mut b: JointBuffers<'_>) -> Result<()> {
-        self.check(&b)?;
-        if let Some(m) = mask {
-            if m.len() != self.len() {
-                return Err(Error::argument(
-                    "reset_mask",
-                    format!("{} entries", m.len()),
-                    format!("expected one per env ({})", self.len()),
-                ));
-            }
-        }
-        for i in 0..self.len() {
-            if mask.is_none_or(|m| m[i]) {
-                self.reset_one(i, &mut b);
-            }
-        }
-        Ok(())
+impl Batch<JointEpisode> {
+    /// `n` envs of `model` (`n` in `num_envs`' domain of [`JOINT_ENV_OPTIONS`]).
+    pub fn new(model: Arc<JointModel>, n: usize) -> Result<JointBatch> {
+        let info = JOINT_ENV_OPTIONS
+            .iter()
+            .find(|i| i.key == "num_envs")
+            .expect("in the table");
+        check_value("num_envs", &info.domain, &OptionValue::Int(n as i128))?;
+        let ep = JointEpisode::new(&model);
+        let cap = model.options().max_episode_steps;
+        Ok(Batch::from_lane(model, ep, n, cap))
     }
 
     /// Step every lane with its action (`actions`: `6 n` numbers, row-major, each in
     /// [-1, 1]; all checked before any lane moves). Lanes whose episode ended at the
     /// previous step are reset instead (next-step autoreset; their action is ignored).
-    pub fn step(&mut self, actions: &[f64], mut b: JointBuffers<'_>) -> Result<()> {
+    pub fn step(&mut self, actions: &[f64], b: JointBuffers<'_>) -> Result<()> {
         self.check(&b)?;
         let n = self.len();
         if actions.len() != 6 * n {
@@ -175,24 +138,15 @@ impl JointBatch {
         }) {
             JointModel::check_action(&format!("actions[{i}]"), &actions[6 * i..6 * i + 6])?;
         }
-        let model = Arc::clone(&self.model);
-        let cap = model.options().max_episode_steps;
-        for i in 0..n {
-            if self.needs_reset[i] {
-                self.reset_one(i, &mut b);
-                continue;
-            }
+        self.step_checked(b, |ep, model, i| {
             let a: [f64; 6] = std::array::from_fn(|k| actions[6 * i + k]);
-            let ep = &mut self.episodes[i];
-            let out = ep.step_unchecked(&model, &a);
-            let truncated = !out.reached && ep.steps() >= cap;
-            b.rewards[i] = out.reward;
-            b.terminated[i] = out.reached;
-            b.truncated[i] = truncated;
-            b.detour_penalty[i] = out.detour_penalty;
-            self.needs_reset[i] = out.reached || truncated;
-            self.write(i, &mut b);
-        }
+            let out = ep.step_unchecked(model, &a);
+            LaneStep {
+                reward: out.reward,
+                reached: out.reached,
+                detour_penalty: out.detour_penalty,
+            }
+        });
         Ok(())
     }
 }

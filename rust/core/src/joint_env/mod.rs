@@ -71,7 +71,8 @@
 //! `joint_env/options.rs`; the clearance check of a step's motion (sub-steps, motion
 //! bounds, closed-form link gaps) in `joint_env/motion.rs`; the reward (eqs. 5, 9, 10 and
 //! the HER relabelling) in `joint_env/reward.rs`; one episode in `joint_env/episode.rs`; the
-//! batch in `joint_env/batch.rs`. Everything public is re-exported here.
+//! batch in `joint_env/batch.rs` (the joint env's instance of [`crate::batch::Batch`]).
+//! Everything public is re-exported here.
 
 use nalgebra::Vector3;
 
