@@ -16,3 +16,19 @@ def wait_for(cond: Callable[[], object], timeout: float = 15.0) -> bool:
             return True
         time.sleep(0.05)
     return bool(cond())
+
+
+def deep_run_env_steps(spec: dict) -> int:
+    """The env steps an SB3 learner's run of ``spec`` uses: the most whole iterations that fit
+    in its budget (``learners.whole_iterations``; docs/BENCHMARKS.md, "Statistics"). An
+    iteration is a rollout of n_envs x n_steps (PPO, A2C; SB3's n_steps defaults 2048 and 5)
+    or one step of the n_envs envs (DQN, QR-DQN)."""
+    from sixaxis_avoid.benchmark.learners import whole_iterations
+
+    hp = spec["hyperparams"]
+    n_envs = int(hp.get("n_envs", 1))
+    on_policy = {"ppo": 2048, "a2c": 5}
+    grain = n_envs
+    if spec["learner"] in on_policy:
+        grain *= int(hp.get("n_steps", on_policy[spec["learner"]]))
+    return whole_iterations(spec["budget"], grain)
