@@ -187,19 +187,18 @@ def baseline(argv: list[str]) -> int:
         )
         print(json.dumps(runs[-1]), flush=True)
     rates = np.array([r["success_rate"] for r in runs])
-    # A Wilson interval of the success rate over every evaluated episode of every seed.
-    n = len(rates) * a.eval_episodes
-    k = float(rates.sum() * a.eval_episodes)
-    z = 1.96
-    centre = (k + z * z / 2) / (n + z * z)
-    half = z * np.sqrt(k * (n - k) / n + z * z / 4) / (n + z * z)
+    # The Wilson interval of the success rate over every evaluated episode of every seed
+    # (the benchmark's one implementation).
+    from sixaxis_avoid.benchmark.stats import wilson
+
+    ci = wilson(round(rates.sum() * a.eval_episodes), len(rates) * a.eval_episodes)
     out = {
         "machine": _core.machine(),
         "args": vars(a),
         "env_id": env_id,
         "runs": runs,
         "success_rate": float(rates.mean()),
-        "success_rate_95ci": [max(0.0, centre - half), min(1.0, centre + half)],
+        "success_rate_95ci": [ci["lo"], ci["hi"]],
         "algorithm2_terminal_path_mm": alg2_mm,
     }
     text = json.dumps(out, indent=2)
