@@ -408,3 +408,16 @@ def test_jax_runs_are_labelled_tuned_or_untuned_by_their_budget(tmp_path):
     assert at100["hyperparams_status"] == "untuned"
     assert at100["hyperparams"]["learning_rate"] != 0.01
     assert at30["family"] == "jax" and at30["budget"] == 30_000
+
+
+def test_a_package_hyperparameter_file_is_named_by_its_repository_path(tmp_path, monkeypatch):
+    from sixaxis_avoid.benchmark import hyperparams as hpmod
+
+    # The page names the file the same way from any working directory (it once printed
+    # "../wt-ci/python/...", the path from the worktree the report ran in).
+    monkeypatch.chdir(tmp_path)
+    shown = hpmod.display_path(hpmod.hyperparams_path("v2"))
+    assert shown.endswith("sixaxis_avoid/benchmark/hyperparams/v2.json")
+    assert not shown.startswith("..") and not shown.startswith("/")
+    # Any other file: relative to the working directory.
+    assert hpmod.display_path(tmp_path / "mine.json") == "mine.json"

@@ -10,6 +10,7 @@ tuning run; the report says so).
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,18 @@ QRDQN_NET_ARCHS = ["64,64", "128,128"]
 def hyperparams_path(name_or_path: str | Path) -> Path:
     p = Path(name_or_path)
     return p if p.suffix else HYPERPARAMS_DIR / f"{name_or_path}.json"
+
+
+def display_path(path: str | Path) -> str:
+    """How a page names a hyperparameter file: a file of this package by its path in the
+    repository (``python/sixaxis_avoid/benchmark/hyperparams/v2.json``, whatever the working
+    directory), any other file by its path relative to the working directory."""
+    p = Path(path).resolve()
+    if p.parent == HYPERPARAMS_DIR:
+        source_tree = HYPERPARAMS_DIR.parents[2]
+        inside = source_tree if source_tree.name == "python" else HYPERPARAMS_DIR.parents[1]
+        return p.relative_to(inside.parent).as_posix()
+    return os.path.relpath(p)
 
 
 def load(name_or_path: str | Path) -> dict[str, Any]:

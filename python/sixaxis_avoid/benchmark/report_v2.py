@@ -301,7 +301,7 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
         key = (r["spec"]["learner"], stats.budget_of_run(r))
         recorded.setdefault(key, set()).add(r["spec"].get("hyperparams_status", "n/a"))
     out = [
-        f"Hyperparameter file: `{os.path.relpath(data['path'])}`"
+        f"Hyperparameter file: `{hpmod.display_path(data['path'])}`"
         + ("" if Path(data["path"]).exists() else " (not written yet: no learner is tuned)")
         + ". A run at budget B takes the values tuned at B; without them it runs with the "
         "learner's defaults and is marked **untuned** (never values tuned at another budget).",

@@ -87,6 +87,20 @@ impl Domain {
         open_min: false,
     };
 
+    /// Numbers in (0, 1] (eq. 6's alpha, a fraction that must move): "must be a number in (0, 1]".
+    pub const UNIT_OPEN: Domain = Domain::Float {
+        min: 0.0,
+        max: 1.0,
+        open_min: true,
+    };
+
+    /// Numbers in [0, 1] (a probability, a discount): "must be a number in [0, 1]".
+    pub const UNIT: Domain = Domain::Float {
+        min: 0.0,
+        max: 1.0,
+        open_min: false,
+    };
+
     /// The integers of a `u32` field from `min`.
     pub const fn u32_from(min: i128) -> Domain {
         Domain::Int {
@@ -623,12 +637,8 @@ mod tests {
             Domain::u32_from(1).reason(),
             "must be an integer in 1..=4294967295"
         );
-        let f = Domain::Float {
-            min: 0.0,
-            max: 1.0,
-            open_min: false,
-        };
-        assert_eq!(f.reason(), "must be a number in [0, 1]");
+        assert_eq!(Domain::UNIT.reason(), "must be a number in [0, 1]");
+        assert_eq!(Domain::UNIT_OPEN.reason(), "must be a number in (0, 1]");
         assert_eq!(Domain::POSITIVE.reason(), "must be a finite number > 0");
         assert_eq!(
             Domain::NON_NEGATIVE.reason(),

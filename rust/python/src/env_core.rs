@@ -162,6 +162,86 @@ fn action_of(py: Python<'_>, action: &Bound<'_, PyAny>) -> PyResult<usize> {
     }
 }
 
+/// The `#[pymethods]` both grid engines have, over the one model they read
+/// (`self.grid_model()`): the world's cells and obstacles, the reward settings and the
+/// goal-reward functions. Added to the engine's own methods (`extra`) and handed to
+/// `$emit!($($args)*, { items })`, as [`vec_pymethods!`] does.
+macro_rules! grid_pymethods {
+    ($emit:ident!($($args:tt)*), { $($extra:tt)* }) => {
+        $emit!($($args)*, {
+            $($extra)*
+
+            /// Number of states (cells inside the bounds).
+            #[getter]
+            fn num_states(&self) -> usize {
+                self.grid_model().num_states()
+            }
+            /// The cell of a state.
+            fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
+                cell_of_state(py, self.grid_model(), state)
+            }
+            /// The state of a cell, or None outside bounds.
+            fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+                Ok(self.grid_model().world().state_of(cell(c, "cell")?))
+            }
+            /// All obstacle centres: the scenario's, then the extra ones.
+            #[getter]
+            fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+                cell_tuples(py, self.grid_model().world().obstacles())
+            }
+            /// The extra obstacles given at construction.
+            #[getter]
+            fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+                cell_tuples(py, &self.grid_model().options().extra_obstacles)
+            }
+            /// The candidate targets: the cells random targets are drawn from (free, not the start).
+            #[getter]
+            fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+                cell_tuples(py, &self.grid_model().target_candidates())
+            }
+            /// Rewards of ``n`` (achieved, desired) goal pairs (float64 ``(n, 3)`` each) given each
+            /// step's ``collided`` (bool ``(n,)``) and ``detour_penalty`` (float64 ``(n,)``): the
+            /// core's ``EnvModel::goal_rewards``, the step's own eqs. 5, 9, 10. ``(n,)`` float64.
+            fn compute_reward<'py>(
+                &self,
+                py: Python<'py>,
+                achieved_goal: &Bound<'py, PyAny>,
+                desired_goal: &Bound<'py, PyAny>,
+                collided: &Bound<'py, PyAny>,
+                detour_penalty: &Bound<'py, PyAny>,
+            ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+                goal_rewards(
+                    py,
+                    self.grid_model(),
+                    achieved_goal,
+                    desired_goal,
+                    collided,
+                    detour_penalty,
+                )
+            }
+            /// The cells (int64 ``(n, 3)``) of normalised goals (float64 ``(n, 3)``).
+            fn goal_to_cell<'py>(
+                &self,
+                py: Python<'py>,
+                goal: &Bound<'py, PyAny>,
+            ) -> PyResult<Bound<'py, PyArray2<i64>>> {
+                goal_cells(py, self.grid_model(), goal)
+            }
+            /// The reward scale.
+            #[getter]
+            fn reward_scale(&self) -> f64 {
+                self.grid_model().options().reward_scale
+            }
+            /// ``(detour, distance)``: which assisted-learning terms shape the reward.
+            #[getter]
+            fn assist(&self) -> (bool, bool) {
+                let a = self.grid_model().options().assist;
+                (a.detour, a.distance)
+            }
+        });
+    };
+}
+
 /// One environment: episode state, observation and info. Used by `SixAxisAvoidEnv`.
 #[pyclass(name = "EnvCore", module = "sixaxis_avoid._core")]
 pub struct PyEnvCore {
@@ -175,6 +255,10 @@ pub struct PyEnvCore {
 }
 
 impl PyEnvCore {
+    fn grid_model(&self) -> &EnvModel {
+        &self.model
+    }
+
     fn observation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         Ok(match self.obs {
             ObsKind::Vector => {
@@ -209,205 +293,147 @@ impl PyEnvCore {
     }
 }
 
-#[pymethods]
-impl PyEnvCore {
-    #[new]
-    #[pyo3(signature = (scenario=None, *, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None, track_path=false))]
-    #[allow(clippy::too_many_arguments)]
-    fn py_new(
-        py: Python<'_>,
-        scenario: Option<&Bound<'_, PyAny>>,
-        obs: &str,
-        assist: Option<&Bound<'_, PyAny>>,
-        reward_scale: f64,
-        random_target: bool,
-        extra_obstacles: Option<&Bound<'_, PyAny>>,
-        track_path: bool,
-    ) -> PyResult<Self> {
-        let obs = obs_kind(py, obs)?;
-        let (scenario, model) = build_model(
-            py,
-            scenario,
-            assist,
-            reward_scale,
-            random_target,
-            extra_obstacles,
-        )?;
-        let mut ep = Episode::new(&model);
-        ep.reset(&model);
-        Ok(PyEnvCore {
-            scenario,
-            path: vec![ep.state() as u32],
-            model,
-            ep,
-            obs,
-            track_path,
-        })
-    }
+grid_pymethods!(
+    impl_block!(
+        #[pymethods]
+        PyEnvCore
+    ),
+    {
+        #[new]
+        #[pyo3(signature = (scenario=None, *, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None, track_path=false))]
+        #[allow(clippy::too_many_arguments)]
+        fn py_new(
+            py: Python<'_>,
+            scenario: Option<&Bound<'_, PyAny>>,
+            obs: &str,
+            assist: Option<&Bound<'_, PyAny>>,
+            reward_scale: f64,
+            random_target: bool,
+            extra_obstacles: Option<&Bound<'_, PyAny>>,
+            track_path: bool,
+        ) -> PyResult<Self> {
+            let obs = obs_kind(py, obs)?;
+            let (scenario, model) = build_model(
+                py,
+                scenario,
+                assist,
+                reward_scale,
+                random_target,
+                extra_obstacles,
+            )?;
+            let mut ep = Episode::new(&model);
+            ep.reset(&model);
+            Ok(PyEnvCore {
+                scenario,
+                path: vec![ep.state() as u32],
+                model,
+                ep,
+                obs,
+                track_path,
+            })
+        }
 
-    /// Seed the generator of random targets.
-    fn seed(&mut self, seed: u64) {
-        self.ep.seed(seed);
-    }
+        /// Seed the generator of random targets.
+        fn seed(&mut self, seed: u64) {
+            self.ep.seed(seed);
+        }
 
-    /// Start a new episode: ``(observation, info)``.
-    fn reset<'py>(&mut self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-        let (ep, model) = (&mut self.ep, &self.model);
-        run_attached(py, || {
-            ep.reset(model);
-            Ok(())
-        })?;
-        self.path.clear();
-        self.path.push(self.ep.state() as u32);
-        Ok((self.observation(py)?, self.info(py, false, false, 0.0)?))
-    }
-
-    /// One step: ``(observation, reward, terminated, info)``.
-    fn step<'py>(
-        &mut self,
-        py: Python<'py>,
-        action: &Bound<'py, PyAny>,
-    ) -> PyResult<(Bound<'py, PyAny>, f64, bool, Bound<'py, PyDict>)> {
-        let a = action_of(py, action)?;
-        let (ep, model) = (&mut self.ep, &self.model);
-        let out = run_attached(py, || Ok(ep.step(model, a)))?;
-        if self.track_path && !out.collided {
+        /// Start a new episode: ``(observation, info)``.
+        fn reset<'py>(
+            &mut self,
+            py: Python<'py>,
+        ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+            let (ep, model) = (&mut self.ep, &self.model);
+            run_attached(py, || {
+                ep.reset(model);
+                Ok(())
+            })?;
+            self.path.clear();
             self.path.push(self.ep.state() as u32);
+            Ok((self.observation(py)?, self.info(py, false, false, 0.0)?))
         }
-        Ok((
-            self.observation(py)?,
-            out.reward,
-            out.reached,
-            self.info(py, out.collided, out.reached, out.detour_penalty)?,
-        ))
-    }
 
-    /// The vector observation of the current state (whatever `obs` is).
-    fn vector_observation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
-        let mut buf = [0f32; VECTOR_OBS_DIM];
-        self.ep.write_vector_obs(&self.model, &mut buf);
-        PyArray1::from_slice(py, &buf)
-    }
+        /// One step: ``(observation, reward, terminated, info)``.
+        fn step<'py>(
+            &mut self,
+            py: Python<'py>,
+            action: &Bound<'py, PyAny>,
+        ) -> PyResult<(Bound<'py, PyAny>, f64, bool, Bound<'py, PyDict>)> {
+            let a = action_of(py, action)?;
+            let (ep, model) = (&mut self.ep, &self.model);
+            let out = run_attached(py, || Ok(ep.step(model, a)))?;
+            if self.track_path && !out.collided {
+                self.path.push(self.ep.state() as u32);
+            }
+            Ok((
+                self.observation(py)?,
+                out.reward,
+                out.reached,
+                self.info(py, out.collided, out.reached, out.detour_penalty)?,
+            ))
+        }
 
-    /// The scenario.
-    #[getter]
-    fn scenario(&self) -> PyScenario {
-        PyScenario {
-            inner: self.scenario.clone(),
+        /// The vector observation of the current state (whatever `obs` is).
+        fn vector_observation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+            let mut buf = [0f32; VECTOR_OBS_DIM];
+            self.ep.write_vector_obs(&self.model, &mut buf);
+            PyArray1::from_slice(py, &buf)
+        }
+
+        /// The scenario.
+        #[getter]
+        fn scenario(&self) -> PyScenario {
+            PyScenario {
+                inner: self.scenario.clone(),
+            }
+        }
+        /// The terminal's state number.
+        #[getter]
+        fn state(&self) -> usize {
+            self.ep.state()
+        }
+        /// Steps since the reset.
+        #[getter]
+        fn steps(&self) -> u32 {
+            self.ep.steps()
+        }
+        /// The terminal's cell.
+        #[getter]
+        fn cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+            cell_tuple(py, self.model.world().cell_of(self.ep.state()))
+        }
+        /// This episode's target cell.
+        #[getter]
+        fn target_cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+            cell_tuple(py, self.model.world().cell_of(self.ep.target()))
+        }
+        /// The start cell.
+        #[getter]
+        fn start_cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+            cell_tuple(py, self.model.world().cell_of(self.model.world().start()))
+        }
+        /// Blocked flag per state (the terminal collides there), as a bool array.
+        #[getter]
+        fn blocked<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+            let w = self.model.world();
+            let v: Vec<bool> = (0..w.num_states()).map(|s| w.is_blocked(s)).collect();
+            PyArray1::from_vec(py, v)
+        }
+        /// The cells visited since the reset, start included (only with ``track_path=True``).
+        #[getter]
+        fn path<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
+            self.path
+                .iter()
+                .map(|&s| cell_tuple(py, self.model.world().cell_of(s as usize)))
+                .collect()
+        }
+        /// `d_o`, distance from the start to this episode's target, cells.
+        #[getter]
+        fn start_distance(&self) -> f64 {
+            self.ep.start_distance(&self.model)
         }
     }
-    #[getter]
-    fn num_states(&self) -> usize {
-        self.model.num_states()
-    }
-    /// The terminal's state number.
-    #[getter]
-    fn state(&self) -> usize {
-        self.ep.state()
-    }
-    /// Steps since the reset.
-    #[getter]
-    fn steps(&self) -> u32 {
-        self.ep.steps()
-    }
-    /// The terminal's cell.
-    #[getter]
-    fn cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        cell_tuple(py, self.model.world().cell_of(self.ep.state()))
-    }
-    /// This episode's target cell.
-    #[getter]
-    fn target_cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        cell_tuple(py, self.model.world().cell_of(self.ep.target()))
-    }
-    /// The start cell.
-    #[getter]
-    fn start_cell<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        cell_tuple(py, self.model.world().cell_of(self.model.world().start()))
-    }
-    /// The cell of a state.
-    fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
-        cell_of_state(py, &self.model, state)
-    }
-    /// The state of a cell, or None outside bounds.
-    fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
-        Ok(self.model.world().state_of(cell(c, "cell")?))
-    }
-    /// All obstacle centres: the scenario's, then the extra ones.
-    #[getter]
-    fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        cell_tuples(py, self.model.world().obstacles())
-    }
-    /// The extra obstacles given at construction.
-    #[getter]
-    fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        cell_tuples(py, &self.model.options().extra_obstacles)
-    }
-    /// The candidate targets: the cells random targets are drawn from (free, not the start).
-    #[getter]
-    fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        cell_tuples(py, &self.model.target_candidates())
-    }
-    /// Rewards of ``n`` (achieved, desired) goal pairs (float64 ``(n, 3)`` each) given each
-    /// step's ``collided`` (bool ``(n,)``) and ``detour_penalty`` (float64 ``(n,)``): the
-    /// core's ``EnvModel::goal_rewards``, the step's own eqs. 5, 9, 10. ``(n,)`` float64.
-    fn compute_reward<'py>(
-        &self,
-        py: Python<'py>,
-        achieved_goal: &Bound<'py, PyAny>,
-        desired_goal: &Bound<'py, PyAny>,
-        collided: &Bound<'py, PyAny>,
-        detour_penalty: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        goal_rewards(
-            py,
-            &self.model,
-            achieved_goal,
-            desired_goal,
-            collided,
-            detour_penalty,
-        )
-    }
-    /// The cells (int64 ``(n, 3)``) of normalised goals (float64 ``(n, 3)``).
-    fn goal_to_cell<'py>(
-        &self,
-        py: Python<'py>,
-        goal: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray2<i64>>> {
-        goal_cells(py, &self.model, goal)
-    }
-    /// Blocked flag per state (the terminal collides there), as a bool array.
-    #[getter]
-    fn blocked<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        let w = self.model.world();
-        let v: Vec<bool> = (0..w.num_states()).map(|s| w.is_blocked(s)).collect();
-        PyArray1::from_vec(py, v)
-    }
-    /// The cells visited since the reset, start included (only with ``track_path=True``).
-    #[getter]
-    fn path<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-        self.path
-            .iter()
-            .map(|&s| cell_tuple(py, self.model.world().cell_of(s as usize)))
-            .collect()
-    }
-    /// `d_o`, distance from the start to this episode's target, cells.
-    #[getter]
-    fn start_distance(&self) -> f64 {
-        self.ep.start_distance(&self.model)
-    }
-    /// The reward scale.
-    #[getter]
-    fn reward_scale(&self) -> f64 {
-        self.model.options().reward_scale
-    }
-    /// ``(detour, distance)``: which assisted-learning terms shape the reward.
-    #[getter]
-    fn assist(&self) -> (bool, bool) {
-        let a = self.model.options().assist;
-        (a.detour, a.distance)
-    }
-}
+);
 
 /// N environments in one Rust object, stepped together into NumPy arrays it owns.
 /// Used by `SixAxisAvoidVectorEnv`.
@@ -469,11 +495,17 @@ impl NumpyBuffers for GridArrays {
     }
 }
 
+impl PyVecEnvCore {
+    fn grid_model(&self) -> &EnvModel {
+        self.batch.model()
+    }
+}
+
 vec_pymethods!(
-    impl_block!(
+    grid_pymethods!(impl_block!(
         #[pymethods]
         PyVecEnvCore
-    ),
+    )),
     {
         #[new]
         #[pyo3(signature = (scenario=None, *, num_envs, max_episode_steps, obs="vector", assist=None, reward_scale=1.0, random_target=false, extra_obstacles=None))]
@@ -567,10 +599,6 @@ vec_pymethods!(
         }
 
         #[getter]
-        fn num_states(&self) -> usize {
-            self.batch.model().num_states()
-        }
-        #[getter]
         fn max_episode_steps(&self) -> u32 {
             self.batch.max_episode_steps()
         }
@@ -591,70 +619,10 @@ vec_pymethods!(
         fn cells(&self, py: Python<'_>) -> Py<PyArray2<i32>> {
             self.arrays.cells.clone_ref(py)
         }
-        /// The candidate targets: the cells random targets are drawn from (free, not the start).
-        #[getter]
-        fn target_candidates<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-            cell_tuples(py, &self.batch.model().target_candidates())
-        }
-        /// All obstacle centres: the scenario's, then the extra ones.
-        #[getter]
-        fn obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-            cell_tuples(py, self.batch.model().world().obstacles())
-        }
-        /// The extra obstacles given at construction.
-        #[getter]
-        fn extra_obstacles<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyTuple>>> {
-            cell_tuples(py, &self.batch.model().options().extra_obstacles)
-        }
-        /// The reward scale.
-        #[getter]
-        fn reward_scale(&self) -> f64 {
-            self.batch.model().options().reward_scale
-        }
         /// Whether each reset draws a random target.
         #[getter]
         fn random_target(&self) -> bool {
             self.batch.model().options().random_target
-        }
-        /// ``(detour, distance)``: which assisted-learning terms shape the reward.
-        #[getter]
-        fn assist(&self) -> (bool, bool) {
-            let a = self.batch.model().options().assist;
-            (a.detour, a.distance)
-        }
-        /// The cell of a state.
-        fn cell_of<'py>(&self, py: Python<'py>, state: usize) -> PyResult<Bound<'py, PyTuple>> {
-            cell_of_state(py, self.batch.model(), state)
-        }
-        /// The state of a cell, or None outside bounds.
-        fn state_of(&self, c: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
-            Ok(self.batch.model().world().state_of(cell(c, "cell")?))
-        }
-        /// As ``EnvCore.compute_reward`` (the envs share one model).
-        fn compute_reward<'py>(
-            &self,
-            py: Python<'py>,
-            achieved_goal: &Bound<'py, PyAny>,
-            desired_goal: &Bound<'py, PyAny>,
-            collided: &Bound<'py, PyAny>,
-            detour_penalty: &Bound<'py, PyAny>,
-        ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-            goal_rewards(
-                py,
-                self.batch.model(),
-                achieved_goal,
-                desired_goal,
-                collided,
-                detour_penalty,
-            )
-        }
-        /// As ``EnvCore.goal_to_cell``.
-        fn goal_to_cell<'py>(
-            &self,
-            py: Python<'py>,
-            goal: &Bound<'py, PyAny>,
-        ) -> PyResult<Bound<'py, PyArray2<i64>>> {
-            goal_cells(py, self.batch.model(), goal)
         }
         /// Each env's current target cell, ``(n, 3)``.
         #[getter]

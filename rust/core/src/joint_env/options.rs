@@ -28,7 +28,7 @@ pub static JOINT_ENV_OPTIONS: [EnvOption; 17] = [
     env_option("target_tolerance_mm", Domain::POSITIVE, EnvDefault::Float(20.0), "mm", "The episode terminates when the terminal is within this distance of the target (the target cell's centre)."),
     env_option("link_radius_mm", Domain::NON_NEGATIVE, EnvDefault::None, "mm", "Radius of every link capsule; None: the scenario's capsules radius (planning.clearance_model), else 0 (the paper's segments)."),
     env_option("safe_distance_mm", Domain::POSITIVE, EnvDefault::None, "mm", "A pose whose capsule-to-box gap is <= this is refused; None: the scenario's capsules margin_mm, else arm_safe_distance in mm minus half a cell (eq. 11's centre distance as a gap to the cube's face)."),
-    env_option("substep_fraction", Domain::Float { min: 0.0, max: 1.0, open_min: true }, EnvDefault::Float(0.5), "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance."),
+    env_option("substep_fraction", Domain::UNIT_OPEN, EnvDefault::Float(0.5), "", "Between two checked sub-steps no arm point moves more than this fraction of the safe distance."),
     env_option("assist", Domain::Bool, EnvDefault::Bool(true), "", "The assisted terms on or off: eq. 10's progress reward and eq. 9's detour penalty."),
     env_option("reward_scale", Domain::NON_NEGATIVE, EnvDefault::Float(1.0), "", "Factor applied to every reward."),
     env_option("target_reward", Domain::NON_NEGATIVE, EnvDefault::Float(10.0), "", "Eq. 5's r: reward of the step that reaches the target."),

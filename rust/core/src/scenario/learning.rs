@@ -43,19 +43,6 @@ impl Default for Rewards {
 /// Default episode cap of `episodes = "auto"` (`--episodes auto`), episodes.
 pub const AUTO_EPISODE_CAP: u32 = 1_000_000;
 
-/// The domain of eq. 6's alpha: (0, 1].
-const UNIT_OPEN: Domain = Domain::Float {
-    min: 0.0,
-    max: 1.0,
-    open_min: true,
-};
-/// The domain of a probability or a discount: [0, 1].
-const UNIT: Domain = Domain::Float {
-    min: 0.0,
-    max: 1.0,
-    open_min: false,
-};
-
 option_set! {
     /// Q-learning parameters (eqs. 6-7) and the assisted strategies: the scenario's
     /// `learning` section and the options of a training run (the one declaration of the
@@ -84,11 +71,11 @@ option_set! {
         /// memory per state; updates computed in f64, stored rounded).
         q_precision: QPrecision = QPrecision::F64; "q_precision", QPrecision::DOMAIN, "";
         /// alpha: learning rate of eq. 6.
-        alpha: f64 = 0.05; "alpha", UNIT_OPEN, "";
+        alpha: f64 = 0.05; "alpha", Domain::UNIT_OPEN, "";
         /// gamma: discount factor of eq. 6.
-        gamma: f64 = 0.9; "gamma", UNIT, "";
+        gamma: f64 = 0.9; "gamma", Domain::UNIT, "";
         /// epsilon at episode 0 (eq. 7: 0.1).
-        epsilon_start: f64 = 0.1; "epsilon_start", UNIT, "";
+        epsilon_start: f64 = 0.1; "epsilon_start", Domain::UNIT, "";
         /// M: episodes over which epsilon falls linearly to 0 (eq. 7).
         epsilon_decay_episodes: u32 = 9900; "epsilon_decay_episodes", Domain::u32_from(0), "episodes";
         /// Env-step budget (ours; 0: none, the paper's): training stops after this many env
