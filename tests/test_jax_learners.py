@@ -188,6 +188,8 @@ def test_run_group_records_read_by_the_report(tmp_path):
         assert [p["env_steps"] for p in res["curve"]] == [256, 1024]
         assert res["env_steps"] == 1024 and res["score"] == res["curve"][-1]["score"]
         assert len(res["paths"]) == len(task.eval_targets) and r["host"]["machine"]
+        # One record layout (runner.run_record) for every learner, with JAX's versions added.
+        assert r["host"]["versions"]["jax"] and r["host"]["versions"]["numpy"]
         for path, length in zip(res["paths"], res["path_lengths"]):
             assert (path is None) == (length is None)
         runner.write_run(tmp_path, r)

@@ -13,8 +13,6 @@ times the number of parallel envs (the envs step in lockstep).
 from __future__ import annotations
 
 import json
-import os
-import socket
 import time
 from typing import Any, ClassVar
 
@@ -203,24 +201,7 @@ def run_group(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 task.scenario, spec["seed"], replan, spec["max_replans"]
             )
         timing["run_wall_time_s"] = (t0 - t_start) / n + time.perf_counter() - t0
-        records.append(
-            {
-                "schema": runner.SCHEMA,
-                "key": runner.run_key(spec),
-                "spec_hash": runner.spec_hash(spec),
-                "spec": spec,
-                "result": result,
-                "timing": timing,
-                "host": {
-                    "hostname": socket.gethostname(),
-                    "pid": os.getpid(),
-                    "ray_node": runner.ray_node(),
-                    "machine": runner.machine(),
-                    "versions": {**runner.versions(), **_jax_versions()},
-                    "numerics": runner.numerics(),
-                },
-            }
-        )
+        records.append(runner.run_record(spec, result, timing, _jax_versions()))
     return records
 
 

@@ -304,6 +304,18 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
             **learner.algorithm2_kwargs(),
         )
     timing["run_wall_time_s"] = time.perf_counter() - t0
+    return run_record(spec, result, timing)
+
+
+def run_record(
+    spec: dict[str, Any],
+    result: dict[str, Any],
+    timing: dict[str, Any],
+    extra_versions: dict[str, str] | None = None,
+) -> dict[str, Any]:
+    """A run file's content, the one layout every learner's runs are written in: the spec,
+    its key and hash, the result, the timing and the host (``extra_versions``: the versions
+    of packages this learner used besides the common ones)."""
     return {
         "schema": SCHEMA,
         "key": run_key(spec),
@@ -318,7 +330,7 @@ def execute_run(spec: dict[str, Any]) -> dict[str, Any]:
             # The CPU and versions the run had: a deep run's floating-point result can
             # depend on the CPU's vendor (docs: python/README.md, "Same result").
             "machine": machine(),
-            "versions": versions(),
+            "versions": {**versions(), **(extra_versions or {})},
             "numerics": numerics(),
         },
     }
