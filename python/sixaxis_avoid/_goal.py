@@ -62,6 +62,21 @@ def goal_to_cell(core: Any, goal: Any) -> np.ndarray:
     return core.goal_to_cell(g.reshape(-1, 3)).reshape(g.shape)
 
 
+def info_dicts(info: Any, shape: tuple[int, ...], n: int, item: str) -> list[Mapping]:
+    """The info dicts handed to a ``compute_reward`` for ``n`` items of ``shape``: one dict
+    (for every item) or one per item, as a list; anything else is an
+    :class:`~sixaxis_avoid.InvalidArgumentError` naming ``info``."""
+    if isinstance(info, Mapping):
+        infos: list[Any] = [info]
+    else:
+        infos = list(np.asarray(info, dtype=object).ravel())
+    if len(infos) not in (1, n) or not all(isinstance(i, Mapping) for i in infos):
+        raise invalid(
+            "info", f"{len(infos)} items", f"expected an info dict or one per {item} {shape}"
+        )
+    return infos
+
+
 def goal_pair(achieved_goal: Any, desired_goal: Any) -> tuple[np.ndarray, np.ndarray, tuple, int]:
     """The (achieved, desired) goals of a ``compute_reward`` call, checked to be float arrays
     of one shape ``(..., 3)``, with that leading shape and its number of goal pairs."""
@@ -93,16 +108,7 @@ class GoalRewards:
     def _info_arrays(self, info: Any, shape: tuple[int, ...], n: int):
         """Each pair's ``collided`` and ``detour_penalty`` from one info dict (for every pair)
         or one per pair."""
-        if isinstance(info, Mapping):
-            infos: list[Any] = [info]
-        else:
-            infos = list(np.asarray(info, dtype=object).ravel())
-        if len(infos) not in (1, n) or not all(isinstance(i, Mapping) for i in infos):
-            raise invalid(
-                "info",
-                f"{len(infos)} items",
-                f"expected an info dict or one per goal pair {shape}",
-            )
+        infos = info_dicts(info, shape, n, "goal pair")
         if all("collided" in i for i in infos):
             collided = np.array([bool(i["collided"]) for i in infos], dtype=bool)
             detour = np.array([float(i.get("detour_penalty", 0.0)) for i in infos])

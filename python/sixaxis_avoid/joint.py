@@ -16,7 +16,7 @@ from gymnasium.vector.utils import batch_space
 
 from sixaxis_avoid import _core
 from sixaxis_avoid._checks import invalid
-from sixaxis_avoid._goal import goal_pair
+from sixaxis_avoid._goal import goal_pair, info_dicts
 from sixaxis_avoid._ids import JOINT_ENV_ID, JOINT_GOAL_ENV_ID
 from sixaxis_avoid.env import as_scenario
 from sixaxis_avoid.vector import NativeVectorEnv
@@ -98,16 +98,7 @@ class JointGoalRewards:
     def _info_arrays(self, info: Any, shape: tuple[int, ...], n: int, achieved: np.ndarray):
         """Each transition's previous achieved goal, ``refused`` and ``detour_penalty`` from
         one info dict (for every transition) or one per transition."""
-        if isinstance(info, Mapping):
-            infos: list[Any] = [info]
-        else:
-            infos = list(np.asarray(info, dtype=object).ravel())
-        if len(infos) not in (1, n) or not all(isinstance(i, Mapping) for i in infos):
-            raise invalid(
-                "info",
-                f"{len(infos)} items",
-                f"expected an info dict or one per transition {shape}",
-            )
+        infos = info_dicts(info, shape, n, "transition")
         keys = ("previous_achieved_goal", "refused", "detour_penalty")
         if all(all(k in i for k in keys) for i in infos):
             previous = np.array(
