@@ -4,6 +4,7 @@ difference makes SB3 PPO fail where jax_ppo succeeds (issue 25)?
     python scripts/ppo_ablation.py run --out-dir /work/runs/ppo-agree
     python scripts/ppo_ablation.py summary --runs /work/runs/ppo-agree \\
         --out docs/results/agreement/ppo-v2-ablation.json
+    python scripts/ppo_ablation.py merge-v2 --new /work/runs/ppo-agree/v2   # the v2 re-run
 
 ``run`` trains SB3 PPO (the benchmark's ``ppo`` learner, through the benchmark's own runner)
 with jax_ppo's tuned 30k values on a few v2 tasks and seeds, once with SB3's implementation
@@ -140,6 +141,40 @@ def summary(runs: Path, v2: Path) -> dict:
     }
 
 
+def merge_v2(new: Path, v2: Path) -> dict:
+    """Replace suite v2's SB3 PPO runs (``v2``, the committed study) by those of a re-run
+    into ``new`` (outside the checkout): the old ppo run files go, the new ones come in, and
+    the manifest's commands drop the old ppo commands and gain the new one with its
+    ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did); the
+    total wall time drops the old ppo runs' own wall times and adds the re-run's."""
+    old_runs = sorted((v2 / "runs").glob("*__ppo__*.json"))
+    new_runs = sorted((new / "runs").glob("*__ppo__*.json"))
+    if {f.name for f in old_runs} != {f.name for f in new_runs}:
+        raise SystemExit(f"{new}: its ppo runs are not the same set as {v2}'s")
+    old_wall = sum(json.loads(f.read_text())["timing"]["run_wall_time_s"] for f in old_runs)
+    man, fresh = (json.loads((d / "study.json").read_text()) for d in (v2, new))
+    command = fresh["command"].replace(f"--out-dir {new}", f"--out-dir {v2}")
+    keep = [c for c in man["commands"] if "--learners ppo " not in c]
+    for f in old_runs:
+        f.unlink()
+    for f in new_runs:
+        (v2 / "runs" / f.name).write_text(f.read_text())
+    man.update(
+        {
+            "command": command,
+            "commands": [*keep, command],
+            "ran_now": fresh["ran_now"],
+            "skipped_now": fresh["skipped_now"],
+            "wall_time_s_now": fresh["wall_time_s_now"],
+            "wall_time_s_total": man["wall_time_s_total"] - old_wall + fresh["wall_time_s_now"],
+            "failures": fresh["failures"],
+            **{k: fresh[k] for k in ("date", "machine", "versions", "load_average")},
+        }
+    )
+    (v2 / "study.json").write_text(json.dumps(man, indent=1) + "\n")
+    return {"replaced": len(new_runs), "old_ppo_wall_s": old_wall, "command": command}
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -150,7 +185,13 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("--runs", type=Path, required=True)
     s.add_argument("--v2", type=Path, default=ROOT / "docs/results/v2")
     s.add_argument("--out", type=Path, required=True)
+    m = sub.add_parser("merge-v2", help="replace docs/results/v2's ppo runs by a re-run's")
+    m.add_argument("--new", type=Path, required=True, help="the re-run's --out-dir")
+    m.add_argument("--v2", type=Path, default=Path("docs/results/v2"))
     a = p.parse_args(argv)
+    if a.cmd == "merge-v2":
+        print(json.dumps(merge_v2(a.new, a.v2)))
+        return 0
     if a.cmd == "run":
         for v in a.variants.split(","):
             cmd = command(v, a.out_dir)
