@@ -141,12 +141,14 @@ def summary(runs: Path, v2: Path) -> dict:
     }
 
 
-def merge_v2(new: Path, v2: Path) -> dict:
+def merge_v2(new: Path, v2: Path, extra_wall_s: float = 0.0) -> dict:
     """Replace suite v2's SB3 PPO runs (``v2``, the committed study) by those of a re-run
     into ``new`` (outside the checkout): the old ppo run files go, the new ones come in, and
     the manifest's commands drop the old ppo commands and gain the new one with its
     ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did); the
-    total wall time drops the old ppo runs' own wall times and adds the re-run's."""
+    total wall time drops the old ppo runs' own wall times and adds the re-run's (and
+    ``extra_wall_s``: earlier attempts into ``new`` that stopped before writing its
+    manifest)."""
     old_runs = sorted((v2 / "runs").glob("*__ppo__*.json"))
     new_runs = sorted((new / "runs").glob("*__ppo__*.json"))
     if {f.name for f in old_runs} != {f.name for f in new_runs}:
@@ -166,7 +168,10 @@ def merge_v2(new: Path, v2: Path) -> dict:
             "ran_now": fresh["ran_now"],
             "skipped_now": fresh["skipped_now"],
             "wall_time_s_now": fresh["wall_time_s_now"],
-            "wall_time_s_total": man["wall_time_s_total"] - old_wall + fresh["wall_time_s_now"],
+            "wall_time_s_total": man["wall_time_s_total"]
+            - old_wall
+            + fresh["wall_time_s_now"]
+            + extra_wall_s,
             "failures": fresh["failures"],
             **{k: fresh[k] for k in ("date", "machine", "versions", "load_average")},
         }
@@ -188,9 +193,15 @@ def main(argv: list[str] | None = None) -> int:
     m = sub.add_parser("merge-v2", help="replace docs/results/v2's ppo runs by a re-run's")
     m.add_argument("--new", type=Path, required=True, help="the re-run's --out-dir")
     m.add_argument("--v2", type=Path, default=Path("docs/results/v2"))
+    m.add_argument(
+        "--extra-wall-s",
+        type=float,
+        default=0.0,
+        help="wall time of earlier attempts into --new that stopped before writing study.json",
+    )
     a = p.parse_args(argv)
     if a.cmd == "merge-v2":
-        print(json.dumps(merge_v2(a.new, a.v2)))
+        print(json.dumps(merge_v2(a.new, a.v2, a.extra_wall_s)))
         return 0
     if a.cmd == "run":
         for v in a.variants.split(","):
