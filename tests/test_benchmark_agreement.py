@@ -81,3 +81,25 @@ def test_the_section_is_written_from_the_result_files_and_keeps_the_page(tmp_pat
     # Re-writing replaces the section rather than appending a second one.
     agreement.main(["--from-json", str(src), "--markdown", str(page)])
     assert page.read_text().count("jax-sb3-agreement:begin") == 1
+
+
+def test_ppo_ablation_section_names_the_cause_from_the_committed_figures():
+    """The v2 PPO ablation (scripts/ppo_ablation.py) renders its table, the gradient-norm
+    reading of the cause with the file's own figures, and the commands that made it."""
+    import json
+    from pathlib import Path
+
+    path = "docs/results/agreement/ppo-v2-ablation.json"
+    ab = json.loads((Path(__file__).resolve().parents[1] / path).read_text())
+    text = "\n".join(agreement.ablation_markdown(ab, path))
+    for name, row in ab["variants"].items():
+        assert f"| {name} | {row['what']} | {row['mean_spl']:.3f} |" in text
+        assert row["command"] in text
+    sb3 = ab["gradnorms"]["sb3"]["median"]["first third"]
+    assert f"scales both by {sb3['clip_factor']:.4f}" in text
+    assert (
+        sb3["actor_rms_after_clip"]
+        < 1e-5
+        < ab["gradnorms"]["vfclip"]["median"]["last third"]["actor_rms_after_clip"]
+    )
+    assert "implementation: rejax" in text

@@ -494,3 +494,88 @@ def test_regenerated_report_keeps_sections_other_scripts_own(tmp_path):
     assert "new table" in text and "old table" not in text
     assert text.endswith("<!-- jax-twin:begin -->\n## JAX twin\nkept\n<!-- jax-twin:end -->\n")
     assert keep_other_sections(tmp_path / "missing.md", new) == new
+
+
+# -- SB3 PPO with rejax's implementation ------------------------------------------------------
+
+
+def test_ppo_implementation_rejax_is_one_preset_and_v2_uses_it_with_jax_ppos_values():
+    """The hyperparameter ``implementation: rejax`` is rejax 0.1.3's PPO in SB3 (LeCun init,
+    actor and critic clipped each on its own, truncation as termination, value clipping at
+    clip_range); suite v2's SB3 PPO at 30k runs jax_ppo's values with it, and a setting that
+    contradicts the preset is an error."""
+    from sixaxis_avoid.benchmark.learners import (
+        PPO_IMPLEMENTATIONS,
+        check_ppo_implementation,
+        expand_ppo_implementation,
+    )
+
+    hp = expand_ppo_implementation({"clip_range": 0.3, "implementation": "rejax"})
+    assert hp == {
+        "clip_range": 0.3,
+        "init": "lecun",
+        "grad_clip": "per_network",
+        "bootstrap_truncated": False,
+        "clip_range_vf": 0.3,
+    }
+    assert expand_ppo_implementation({"init": "lecun"}) == {"init": "lecun"}  # no preset
+    assert check_ppo_implementation({}) == PPO_IMPLEMENTATIONS["sb3"]
+    with pytest.raises(LearnerError, match="contradicts implementation 'rejax'"):
+        expand_ppo_implementation({"implementation": "rejax", "init": "orthogonal"})
+    with pytest.raises(LearnerError, match="implementation: 'cleanrl'"):
+        expand_ppo_implementation({"implementation": "cleanrl"})
+    with pytest.raises(LearnerError, match="init: 'xavier'"):
+        check_ppo_implementation({"init": "xavier"})
+    data = json.loads(hpmod.hyperparams_path("v2").read_text())["learners"]
+    ppo = data["ppo"]["by_budget"]["30000"]["values"]
+    jax = data["jax_ppo"]["by_budget"]["30000"]["values"]
+    assert ppo.pop("implementation") == "rejax"
+    # jax_ppo's values in SB3's names (SB3's MlpPolicy is tanh, as jax_ppo's activation).
+    assert ppo == {k: v for k, v in jax.items() if k != "activation"}
+    assert jax["activation"] == "tanh"
+    suite = load_suite("v2")
+    task = [suite.task("paper_simple")]
+    spec = plan_runs(suite, ["ppo"], seeds=[0], tasks=task, hyperparams="v2", budgets=[30000])
+    assert spec[0]["hyperparams"]["implementation"] == "rejax"
+
+
+def test_ppo_rejax_settings_reach_the_sb3_model():
+    """``implementation: rejax`` builds SB3 PPO with LeCun-initialised layers (zero biases,
+    variance 1/fan_in, truncated at 2 standard deviations), one Adam whose two parameter
+    groups (actor, critic) are clipped each on its own with SB3's joint clip off, SB3's value
+    clipping, and a VecEnv whose infos carry no TimeLimit.truncated flag."""
+    import torch
+    from sixaxis_avoid.benchmark.learners import RunContext, lecun_init
+
+    suite = load_suite("quick")
+    spec = plan_runs(suite, ["ppo"], seeds=[0], tasks=[suite.task("paper_simple")])[0]
+    hp = {**spec["hyperparams"], "n_envs": 2, "n_steps": 64, "batch_size": 64}
+    hp.update(implementation="rejax", clip_range=0.3, max_grad_norm=0.5)
+    learner = resolve("ppo")(hp)
+    ctx = RunContext(task_of(spec), 0, 0, learner.hyperparams, [], learner)
+    learner.learn(ctx)
+    model = learner.model
+    assert model.max_grad_norm == float("inf")
+    assert model.clip_range_vf(1.0) == 0.3
+    assert type(model.get_env()).__name__ == "TruncationAsTermination"
+    opt = model.policy.optimizer
+    assert type(opt).__name__ == "GroupClippedAdam" and len(opt.param_groups) == 2
+    grouped = [p for g in opt.param_groups for p in g["params"]]
+    assert {id(p) for p in grouped} == {id(p) for p in model.policy.parameters()}
+    critic = {id(p) for p in model.policy.value_net.parameters()}
+    assert critic <= {id(p) for p in opt.param_groups[1]["params"]}
+    assert model.policy.ortho_init is False  # LeCun instead (checked below on fresh layers)
+    net = torch.nn.Sequential(torch.nn.Linear(13, 256), torch.nn.Tanh(), torch.nn.Linear(256, 6))
+    lecun_init(net)
+    for m in (net[0], net[2]):
+        std = (1.0 / m.in_features) ** 0.5 / 0.87962566103423978
+        assert torch.all(m.bias == 0)
+        assert m.weight.abs().max() <= 2 * std + 1e-6
+        # variance 1/fan_in (jax's lecun_normal), within sampling error
+        assert abs(float(m.weight.detach().var()) * m.in_features - 1.0) < 0.15
+    # SB3's own: orthogonal weights, the policy head at gain 0.01.
+    plain = resolve("ppo")({**hp, "implementation": "sb3", "clip_range_vf": None})
+    plain.learn(RunContext(task_of(spec), 0, 0, plain.hyperparams, [], plain))
+    assert plain.model.max_grad_norm == 0.5
+    assert plain.model.policy.action_net.weight.abs().max() < 0.05
+    assert type(plain.model.policy.optimizer) is torch.optim.Adam

@@ -241,6 +241,7 @@ def write_synthetic_study(tmp_path):
                         "budget": 0 if lr == "bfs" else b, "budget_axis": b,
                         "hyperparams_status": "n/a" if lr == "bfs"
                         else ("tuned" if (lr, b) == ("alpha", 10000) else "untuned"),
+                        **({"hyperparams": {"implementation": "rejax"}} if lr == "beta" else {}),
                     }  # fmt: skip
                     record = {
                         "spec": spec,
@@ -307,6 +308,7 @@ def test_v2_report_on_synthetic_runs(tmp_path):
     assert "| alpha | 0.000 (all equal) ✗ | 0.800 [" in text  # no zero-width "interval"
     assert "270 runs: 3 learners x 3 tasks x 10 seeds x 3 budgets" in text
     assert "beta at 1000: 1 of 30 runs, up to 1500." in text
+    assert "**Implementation**: beta runs with `implementation: rejax`" in text
     assert "| generated:easy | 1 | 0.700, 0.700 [0.397, 0.892] (7/10) |" in text  # per group
     assert "[BENCHMARKS-v1.md](BENCHMARKS-v1.md)" in text
     assert (tmp_path / "figures" / "bench-v2" / "bench_v2_curves.png").stat().st_size > 0

@@ -63,6 +63,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="do not train: read this result file (repeatable) and write --markdown",
     )
     p.add_argument(
+        "--ablation",
+        type=Path,
+        action="append",
+        default=[],
+        help="with --from-json: an ablation file of scripts/ppo_ablation.py (repeatable), "
+        "shown after the table",
+    )
+    p.add_argument(
         "--markdown",
         type=Path,
         default=None,
@@ -177,9 +185,13 @@ def summarise(jax_s: np.ndarray, sb3_s: np.ndarray, seed: int = 0) -> dict[str, 
 DIFFERENCES = {
     "ppo": (
         "value loss: rejax clips the value prediction to ±clip_range around the rollout's "
-        "value (CleanRL's form); SB3 does not clip it (`clip_range_vf=None`)",
+        "value (CleanRL's form: the larger of the clipped and unclipped losses, times 0.5); "
+        "SB3 does not clip it (`clip_range_vf=None`), and with `clip_range_vf` takes the "
+        "clipped prediction's loss alone (what `implementation: rejax` uses)",
         "optimiser: rejax has one Adam per network (actor, critic), each clipped to "
-        "max_grad_norm on its own; SB3 one Adam over the summed loss, clipped once",
+        "max_grad_norm on its own; SB3 one Adam over the summed loss, clipped once "
+        "(`implementation: rejax`: one Adam, its actor and critic parameter groups clipped "
+        "each on its own)",
     ),
     "dqn": (
         "loss: squared error in rejax; Huber (smooth L1) in SB3",
@@ -196,7 +208,87 @@ DIFFERENCES = {
 }
 
 
-def markdown(results: list[dict[str, Any]]) -> str:
+def ablation_markdown(ab: dict[str, Any], path: str) -> list[str]:
+    """An ablation of ``scripts/ppo_ablation.py``: SB3 PPO with one implementation factor at a
+    time changed toward rejax's, against jax_ppo's runs on the same tasks and seeds, and the
+    gradient norms of ``scripts/ppo_gradnorms.py`` that show why."""
+    j = ab["jax_ppo"]
+    rows = ab["variants"]
+    lines = [
+        "",
+        f"### Why SB3 PPO failed with jax_ppo's values: an ablation ({int(ab['budget']):,} "
+        "env steps)",
+        "",
+        f"{ab['question']} SB3 PPO (the benchmark's `ppo` learner, through the benchmark's "
+        "runner) with jax_ppo's tuned values, first with SB3's implementation, then with one "
+        "factor at a time changed toward rejax 0.1.3's, then all; tasks "
+        f"{', '.join(ab['tasks'])}, seeds {', '.join(str(s) for s in ab['seeds'])}; mean final "
+        f"SPL and runs that reached the target. File: `{path}` (each variant's command and "
+        "values).",
+        "",
+        "| variant | what changed | mean SPL | reached |",
+        "|---|---|---|---|",
+        f"| jax_ppo | rejax on the JAX twin (the committed v2 runs) | {j['mean_spl']:.3f} "
+        f"| {j['successes']}/{j['runs']} |",
+    ]
+    for name, r in rows.items():
+        lines.append(
+            f"| {name} | {r['what']} | {r['mean_spl']:.3f} | {r['successes']}/{r['runs']} |"
+        )
+    g = ab.get("gradnorms", {})
+    if "sb3" in g:
+        b0 = g["sb3"]["median"]["first third"]
+        lines += [
+            "",
+            f"**Cause.** Gradient norms per minibatch update (`scripts/ppo_gradnorms.py`, "
+            f"{g['sb3']['task']} seed {g['sb3']['seed']}, median over the first third of the "
+            f"updates): with SB3's implementation the critic's gradient norm is "
+            f"{b0['critic_norm']:.0f} against the actor's {b0['actor_norm']:.2f}, so SB3's one "
+            f"clip of their joint norm to max_grad_norm scales both by "
+            f"{b0['clip_factor']:.4f}, and the actor's clipped gradient (RMS "
+            f"{b0['actor_rms_after_clip']:.1e} per weight) falls below Adam's eps (1e-5): "
+            "Adam's step m / (sqrt(v) + eps) shrinks with it, and the policy hardly moves in "
+            "30k env steps. rejax clips each network on its own"
+            + (
+                f" (`gradclip` alone: {rows['gradclip']['successes']}/"
+                f"{rows['gradclip']['runs']} reached)."
+                if "gradclip" in rows
+                else "."
+            ),
+        ]
+        others = []
+        for name, what in (("init", "LeCun init"), ("vfclip", "value clipping")):
+            if name in g:
+                m = g[name]["median"]["last third"]
+                others.append(
+                    f"{what} (`{name}`, {rows[name]['successes']}/{rows[name]['runs']} "
+                    f"reached): critic norm {m['critic_norm']:.0f}, clip factor "
+                    f"{m['clip_factor']:.4f}, actor RMS {m['actor_rms_after_clip']:.1e} over the "
+                    "last third of the updates"
+                )
+        if others:
+            lines[-1] += (
+                " The other two factors that close it do so through the same clip: "
+                + "; ".join(others)
+                + "."
+            )
+        lines[-1] += (
+            " The values were tuned on rejax's implementation; with SB3's they starve the "
+            "actor. The benchmark's `ppo` learner now runs them with `implementation: rejax` "
+            "(set in the hyperparameter file's ppo entry; `learners.PPO_IMPLEMENTATIONS`: LeCun "
+            "init, actor and critic clipped each on its own, truncation as termination, value "
+            "clipping at clip_range), and the v2 ppo runs above are those."
+        )
+    lines += ["", "```bash", *(r["command"] for r in rows.values())]
+    lines += [*ab.get("gradnorms_commands", []), "```"]
+    if ab.get("command_note"):
+        lines += ["", f"RUNS: a directory outside the checkout. Note: {ab['command_note']}."]
+    return lines
+
+
+def markdown(
+    results: list[dict[str, Any]], ablations: list[tuple[dict[str, Any], str]] = ()
+) -> str:
     """The section: per algorithm and task, both implementations' final score and area under
     the curve with intervals, and whether they agree."""
     lines = [
@@ -276,12 +368,21 @@ def markdown(results: list[dict[str, Any]]) -> str:
             "to look, and an ablation that removes them one at a time is what would explain the "
             "gap."
         )
+    for ab, path in ablations:
+        lines += ablation_markdown(ab, path)
     algos = sorted({r["flags"]["algo"] for r in results})
     lines += ["", "Where rejax and SB3 differ with the same values (read in their sources):", ""]
     for algo in [*algos, "both"]:
         lines += [
             f"- {'' if algo == 'both' else algo.upper() + ', '}{d}." for d in DIFFERENCES[algo]
         ]
+    if ablations:
+        commands.append(
+            "python -m sixaxis_avoid.benchmark.agreement "
+            + " ".join(f"--from-json {r['flags']['out']}" for r in results if r["flags"].get("out"))
+            + "".join(f" --ablation {path}" for _, path in ablations)
+            + " --markdown docs/BENCHMARKS.md  # this section"
+        )
     lines += ["", "```bash", *commands, "```"]
     return "\n".join(lines)
 
@@ -307,8 +408,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     a = parse_args(argv)
     if a.from_json:
         results = [json.loads(p.read_text()) for p in a.from_json]
+        ablations = [(json.loads(p.read_text()), str(p)) for p in a.ablation]
         if a.markdown is not None:
-            write_section(a.markdown, markdown(results))
+            write_section(a.markdown, markdown(results, ablations))
         return {"results": len(results)}
     suite = load_suite(a.suite)
     flags = {k: (None if v is None else str(v)) if k in ("out", "markdown") else v

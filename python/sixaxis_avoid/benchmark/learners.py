@@ -260,11 +260,20 @@ class RetrainPerRound:
             path = self.ctx.points[-1]["paths"][0]
             steps = self.ctx.env_steps
         else:
+            import sixaxis_avoid as sa
+
             fresh = type(self.learner)(self.learner.hyperparams)
             ctx = RunContext(
                 self.ctx.task, seed, self.ctx.budget, fresh.hyperparams, [], fresh, scenario
             )
-            fresh.learn(ctx)
+            try:
+                fresh.learn(ctx)
+            except sa.InvalidArgumentError as e:
+                if "`target`" not in str(e):
+                    raise
+                # The round's new obstacles block the target (a path cell next to it on a
+                # fine grid): no env, no path in this world, and Algorithm 2 fails.
+                return {"path": None, "total_steps": 0}
             path, steps = fresh.greedy_path(scenario), ctx.env_steps
         cells = None if path is None else [tuple(int(v) for v in c) for c in path]
         return {"path": cells, "total_steps": int(steps)}
@@ -579,6 +588,142 @@ PPO_DEFAULTS: dict[str, Any] = {**ENV_DEFAULTS, "n_envs": 8, "n_steps": 256, "en
 A2C_DEFAULTS: dict[str, Any] = {**ENV_DEFAULTS, "n_envs": 8, "ent_coef": 0.01}
 
 
+#: PPO's implementation variants, SB3's defaults first. rejax 0.1.3's PPO (the ``jax_ppo``
+#: learner) differs from SB3's in each; ``"rejax"`` settings make SB3 PPO do what rejax does:
+#:
+#: - ``init``: ``"orthogonal"`` (SB3: orthogonal weights, gain sqrt 2 in the hidden layers,
+#:   0.01 in the policy head, 1 in the value head) or ``"lecun"`` (flax's default, rejax's:
+#:   LeCun normal weights, truncated at 2 standard deviations, zero biases, every layer) or
+#:   ``"torch"`` (PyTorch's default ``nn.Linear`` init: SB3's ``ortho_init=False``);
+#: - ``grad_clip``: ``"joint"`` (SB3: one global norm over actor and critic) or
+#:   ``"per_network"`` (rejax: one optimiser per network, each clipped to max_grad_norm on
+#:   its own);
+#: - ``bootstrap_truncated``: True (SB3: a time-limit truncation bootstraps from the value of
+#:   the last observation) or False (rejax: a truncated episode ends like a terminal one).
+#:
+#: Value clipping is SB3's own ``clip_range_vf`` (rejax clips with its ``clip_eps``, i.e.
+#: ``clip_range``).
+PPO_IMPLEMENTATION: dict[str, tuple[Any, ...]] = {
+    "init": ("orthogonal", "lecun", "torch"),
+    "grad_clip": ("joint", "per_network"),
+    "bootstrap_truncated": (True, False),
+}
+
+
+#: Named sets of PPO's implementation variants, chosen by the hyperparameter
+#: ``"implementation"``. ``"rejax"``: what rejax 0.1.3's PPO does (``jax_ppo``), so that SB3
+#: PPO run with jax_ppo's values is the same algorithm (docs/BENCHMARKS.md, "JAX against
+#: SB3"); its value clipping uses ``clip_range`` (rejax's ``clip_eps`` clips both).
+PPO_IMPLEMENTATIONS: dict[str, dict[str, Any]] = {
+    "sb3": {"init": "orthogonal", "grad_clip": "joint", "bootstrap_truncated": True},
+    "rejax": {
+        "init": "lecun",
+        "grad_clip": "per_network",
+        "bootstrap_truncated": False,
+        "clip_range_vf": "clip_range",
+    },
+}
+
+
+def expand_ppo_implementation(hp: dict[str, Any]) -> dict[str, Any]:
+    """``hp`` with its ``"implementation"`` (a :data:`PPO_IMPLEMENTATIONS` name; without
+    one, SB3's own defaults apply) replaced by the settings it names. A setting given on its
+    own in ``hp`` as well must agree with the preset (:class:`LearnerError` otherwise)."""
+    hp = dict(hp)
+    name = hp.pop("implementation", None)
+    if name is None:
+        return hp
+    if name not in PPO_IMPLEMENTATIONS:
+        raise LearnerError(
+            f"implementation: {name!r} is not one of {', '.join(PPO_IMPLEMENTATIONS)}"
+        )
+    for k, v in PPO_IMPLEMENTATIONS[name].items():
+        if v == "clip_range":
+            v = hp.get("clip_range", 0.2)  # SB3's default clip_range
+        if k in hp and hp[k] != v:
+            raise LearnerError(
+                f"{k}: {hp[k]!r} contradicts implementation {name!r}, which sets {v!r}"
+            )
+        hp[k] = v
+    return hp
+
+
+def check_ppo_implementation(impl: dict[str, Any]) -> dict[str, Any]:
+    """``impl`` over SB3's defaults (the first choice of each :data:`PPO_IMPLEMENTATION`
+    entry), checked: a value not among the choices raises :class:`LearnerError`."""
+    out = {k: v[0] for k, v in PPO_IMPLEMENTATION.items()}
+    for k, v in impl.items():
+        if k not in PPO_IMPLEMENTATION or v not in PPO_IMPLEMENTATION[k]:
+            raise LearnerError(
+                f"{k}: {v!r} is not one of {PPO_IMPLEMENTATION.get(k, ())} (PPO's implementation "
+                f"variants: {', '.join(PPO_IMPLEMENTATION)})"
+            )
+        out[k] = v
+    return out
+
+
+def lecun_init(module: Any) -> None:
+    """flax's default ``nn.Dense`` initialisation on every ``torch.nn.Linear`` of ``module``,
+    in place: weights LeCun normal (variance 1/fan_in, a normal truncated at 2 standard
+    deviations and rescaled, ``jax.nn.initializers.lecun_normal``), biases zero."""
+    import torch
+
+    for m in module.modules():
+        if isinstance(m, torch.nn.Linear):
+            # jax's truncated_normal variance_scaling: std of the untruncated normal
+            # sqrt(1 / fan_in) / 0.87962566103423978, cut at +-2 of it.
+            std = (1.0 / m.in_features) ** 0.5 / 0.87962566103423978
+            with torch.no_grad():
+                torch.nn.init.trunc_normal_(m.weight, std=std, a=-2 * std, b=2 * std)
+                torch.nn.init.zeros_(m.bias)
+
+
+def per_network_clipping(model: Any) -> None:
+    """Clip the actor's and the critic's gradients to ``max_grad_norm`` each (rejax's two
+    optimisers), not their joint norm (SB3): one Adam over two parameter groups (Adam's state
+    is per parameter, so it is two Adams), clipped per group in ``step``; SB3's own joint
+    clipping is switched off (max_grad_norm infinite)."""
+    import torch
+
+    policy, limit = model.policy, float(model.max_grad_norm)
+    critic = [*policy.mlp_extractor.value_net.parameters(), *policy.value_net.parameters()]
+    ids = {id(p) for p in critic}
+    actor = [p for p in policy.parameters() if id(p) not in ids]
+
+    class GroupClippedAdam(torch.optim.Adam):
+        def step(self, closure: Any = None) -> Any:
+            for group in self.param_groups:
+                torch.nn.utils.clip_grad_norm_(group["params"], limit)
+            return super().step(closure)
+
+    old = policy.optimizer
+    policy.optimizer = GroupClippedAdam(
+        [{"params": actor}, {"params": critic}],
+        lr=old.param_groups[0]["lr"],
+        **policy.optimizer_kwargs,
+    )
+    model.max_grad_norm = float("inf")
+
+
+def truncation_as_termination(vec: Any) -> Any:
+    """``vec`` without the ``TimeLimit.truncated`` flag in its infos, so that SB3's PPO does
+    not bootstrap a truncated episode from its last observation's value (rejax: ``done`` is
+    terminated or truncated, and both end the return)."""
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    class TruncationAsTermination(VecEnvWrapper):
+        def reset(self) -> Any:
+            return self.venv.reset()
+
+        def step_wait(self) -> Any:
+            obs, rewards, dones, infos = self.venv.step_wait()
+            for info in infos:
+                info.pop("TimeLimit.truncated", None)
+            return obs, rewards, dones, infos
+
+    return TruncationAsTermination(vec)
+
+
 def greedy_rollout(model: Any, env: gym.Env, cap: int) -> list[Cell] | None:
     """The deterministic policy's path from the start: the cells visited until the target
     (bumps into obstacles leave the terminal in place and are not moves); None on a loop (a
@@ -631,7 +776,7 @@ class SB3Learner(Learner):
         from stable_baselines3.common.logger import Logger
 
         torch.set_num_threads(1)
-        hp = dict(self.hyperparams)
+        hp = self.expand_hyperparams(dict(self.hyperparams))
         env_kw = {k: hp.pop(k) for k in ENV_KEYS if k in hp}
         n_envs = int(env_kw.pop("n_envs", 1))
         self._env_kw = {k: env_kw[k] for k in ("reward_scale", "assist") if k in env_kw}
@@ -642,6 +787,8 @@ class SB3Learner(Learner):
         vec = ctx.make_vec_env(n_envs, **env_kw)
         self.vec_env = type(vec.unwrapped).__name__
         policy_kwargs = {k: hp.pop(k) for k in ("net_arch", "n_quantiles") if k in hp}
+        impl = {k: hp.pop(k) for k in self.implementation_keys if k in hp}
+        vec, policy_kwargs = self.before_model(impl, vec, policy_kwargs)
         schedule = hp.pop("lr_schedule", "constant")
         if schedule == "linear":
             # rl-baselines3-zoo's "lin_": from the value down to 0 at the end of the budget.
@@ -674,6 +821,7 @@ class SB3Learner(Learner):
             verbose=0,
             **hp,
         )
+        self.after_model(impl, self.model)
         self.model.set_logger(Logger(None, []))  # no log files
         self._eval_envs: dict[Cell, gym.Env] = {}
         # Whole rollouts (on-policy) or vector steps (off-policy) at or under the budget:
@@ -681,6 +829,23 @@ class SB3Learner(Learner):
         n_steps = int(getattr(self.model, "n_steps", 1))
         self.model.learn(total_timesteps=whole_iterations(ctx.budget, n_steps * self.model.n_envs))
         vec.close()
+
+    #: Hyperparameters that choose between implementation variants rather than set SB3
+    #: arguments (PPO: the rejax-equivalent settings, :data:`PPO_IMPLEMENTATION`).
+    implementation_keys: ClassVar[tuple[str, ...]] = ()
+
+    def expand_hyperparams(self, hp: dict[str, Any]) -> dict[str, Any]:
+        """``hp`` with any preset it names replaced by the preset's values."""
+        return hp
+
+    def before_model(
+        self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
+    ) -> tuple[Any, dict[str, Any]]:
+        """The VecEnv and policy keywords for the implementation variant ``impl``."""
+        return vec, policy_kwargs
+
+    def after_model(self, impl: dict[str, Any], model: Any) -> None:
+        """Changes to the built model for the implementation variant ``impl``."""
 
     def greedy_path(self, world: Any) -> list[Cell] | None:
         import sixaxis_avoid as sa
@@ -714,6 +879,27 @@ class PPO(SB3Learner):
     title = "Stable-Baselines3 PPO"
     algorithm_path = "stable_baselines3:PPO"
     defaults = PPO_DEFAULTS
+    implementation_keys = tuple(PPO_IMPLEMENTATION)
+
+    def expand_hyperparams(self, hp: dict[str, Any]) -> dict[str, Any]:
+        return expand_ppo_implementation(hp)
+
+    def before_model(
+        self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
+    ) -> tuple[Any, dict[str, Any]]:
+        impl = check_ppo_implementation(impl)
+        if impl["init"] != "orthogonal":
+            policy_kwargs = {**policy_kwargs, "ortho_init": False}  # lecun: re-initialised below
+        if not impl["bootstrap_truncated"]:
+            vec = truncation_as_termination(vec)
+        return vec, policy_kwargs
+
+    def after_model(self, impl: dict[str, Any], model: Any) -> None:
+        impl = check_ppo_implementation(impl)
+        if impl["init"] == "lecun":
+            lecun_init(model.policy)
+        if impl["grad_clip"] == "per_network":
+            per_network_clipping(model)
 
 
 class A2C(SB3Learner):

@@ -139,6 +139,14 @@ def analyse_v2(
                         "status": sorted(
                             {r["spec"].get("hyperparams_status", "n/a") for r in mine}
                         ),
+                        # A learner run as another implementation (SB3 PPO as rejax's).
+                        "implementation": sorted(
+                            {
+                                str(r["spec"]["hyperparams"]["implementation"])
+                                for r in mine
+                                if r["spec"].get("hyperparams", {}).get("implementation")
+                            }
+                        ),
                         "per_task": {
                             t: {
                                 "mean": float(np.mean(scores[lr][:, j])),
@@ -509,6 +517,23 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             f"<!-- {HEADLINE_SECTION}:end -->",
             "",
         ]
+        impl = {
+            lr: g["implementation"]
+            for lr, g in a["per_budget"][b]["learners"].items()
+            if g.get("implementation")
+        }
+        if impl:
+            L += [
+                "**Implementation**: "
+                + "; ".join(
+                    f"{lr} runs with `implementation: {', '.join(v)}`" for lr, v in impl.items()
+                )
+                + " (`learners.PPO_IMPLEMENTATIONS`: SB3 PPO with rejax 0.1.3's initialisation, "
+                "gradient clipping per network, truncation as termination and value clipping, "
+                "the implementation jax_ppo's values were tuned on; with SB3's own they starve "
+                "its actor: *JAX against SB3*, the ablation).",
+                "",
+            ]
         if a["over_budget"]:
             L += [
                 "**Over budget**: these runs used more env steps than the budget they are "
