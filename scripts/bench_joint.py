@@ -158,19 +158,23 @@ def baseline(argv: list[str]) -> int:
         t0 = time.perf_counter()
         model = algo(policy, train_env, **kwargs).learn(a.timesteps)
         train_s = time.perf_counter() - t0
-        successes, returns, lengths = 0, [], []
+        successes, returns, lengths, final_mm, closest_mm = 0, [], [], [], []
         for k in range(a.eval_episodes):
             obs, _ = env.reset(seed=10_000 + k)
             u = env.unwrapped
             points, total, done = [u.terminal_mm], 0.0, False
             info: dict = {}
+            closest = float(np.linalg.norm(u.terminal_mm - u.target_mm))
             while not done:
                 action, _ = model.predict(obs, deterministic=True)
                 obs, r, te, tr, info = env.step(action)
                 total += float(r)
                 points.append(u.terminal_mm)
+                closest = min(closest, float(info["distance_to_target"]))
                 done = te or tr
             returns.append(total)
+            final_mm.append(float(info["distance_to_target"]))
+            closest_mm.append(closest)
             if info.get("is_success"):
                 successes += 1
                 lengths.append(path_length_mm(np.array(points)))
@@ -180,6 +184,8 @@ def baseline(argv: list[str]) -> int:
                 "success_rate": successes / a.eval_episodes,
                 "mean_return": float(np.mean(returns)),
                 "terminal_path_mm": lengths,
+                "final_distance_mm": final_mm,
+                "closest_distance_mm": closest_mm,
                 "train_seconds": train_s,
                 "env_steps": int(model.num_timesteps),
                 "updates": int(model._n_updates),

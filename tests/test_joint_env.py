@@ -322,7 +322,8 @@ def test_sb3_vecenv_over_the_joint_batch():
 def test_baseline_script_trains_on_the_native_vec_env(tmp_path):
     """scripts/bench_joint.py baseline with --n-envs trains SB3 SAC on the native VecEnv:
     the run counts every lane's env steps, updates gradient-steps times per vector step
-    after learning starts, and writes its JSON (docs/JOINT.md, "Baselines")."""
+    after learning starts, records the evaluated episode's final and closest distance to
+    the target, and writes its JSON (docs/JOINT.md, "Baselines")."""
     import importlib.util
     import json
     from pathlib import Path
@@ -341,4 +342,7 @@ def test_baseline_script_trains_on_the_native_vec_env(tmp_path):
     assert run["env_steps"] == 128
     # 16 vector steps of 8 envs; updates from the vector step past 64 env steps: 8 x 2.
     assert run["updates"] == 2 * (128 - 64) // 8
+    # The evaluated episode's last and closest terminal-target distances (mm).
+    (final,), (closest,) = run["final_distance_mm"], run["closest_distance_mm"]
+    assert 0 <= closest <= final
     assert rec["algorithm2_terminal_path_mm"] == 900.0
