@@ -4,7 +4,7 @@ often do its settings reach the target, and on the shortest path?
     python scripts/readme_ppo_seeds.py --seeds 0,1,2,3,4 --out docs/results/readme-ppo-seeds.json
 
 Each seed runs the example exactly (``tests/test_readme_ppo.py``'s code, with ``seed=k`` for
-the vector env and PPO, torch's default threads as in the test), one after the other, and
+the vector env and PPO, torch's default threads unless --torch-threads), one after the other, and
 records whether the greedy rollout reached the target and in how many moves, with the
 package versions.
 """
@@ -17,6 +17,8 @@ import json
 import time
 from pathlib import Path
 
+from sixaxis_avoid.benchmark._io import atomic_write_text
+
 
 def example(seed: int, steps: int) -> dict:
     """The README example with ``seed`` in place of 0."""
@@ -26,7 +28,15 @@ def example(seed: int, steps: int) -> dict:
 
     t0 = time.perf_counter()
     venv = SixAxisVecEnv(8, seed=seed, reward_scale=1e-4, max_episode_steps=200)
-    model = PPO("MlpPolicy", venv, n_steps=256, ent_coef=0.01, seed=seed, device="cpu")
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=256,
+        ent_coef=0.01,
+        learning_rate=lambda progress: 3e-4 * progress,  # linear decay to 0
+        seed=seed,
+        device="cpu",
+    )
     model.learn(steps)
     env = sixaxis_avoid.make(reward_scale=1e-4, max_episode_steps=200)
     obs, info = env.reset(seed=0)
@@ -46,8 +56,15 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", default="0,1,2,3,4", help="comma list")
     p.add_argument("--steps", type=int, default=200_000, help="PPO's total_timesteps")
+    p.add_argument(
+        "--torch-threads", type=int, default=None, help="torch.set_num_threads (default: torch's)"
+    )
     p.add_argument("--out", type=Path, required=True)
     a = p.parse_args(argv)
+    if a.torch_threads is not None:
+        import torch
+
+        torch.set_num_threads(a.torch_threads)
     runs: list[dict] = []
     for s in (int(x) for x in a.seeds.split(",")):
         runs.append(example(s, a.steps))
@@ -62,7 +79,9 @@ def write(a: argparse.Namespace, runs: list[dict]) -> dict:
     out = {
         "example": "README.md, 'PPO reaches the target in a few lines' (seed=k for venv and PPO)",
         "command": f"python scripts/readme_ppo_seeds.py --seeds {a.seeds} --steps {a.steps} "
-        f"--out {a.out}",
+        + ("" if a.torch_threads is None else f"--torch-threads {a.torch_threads} ")
+        + f"--out {a.out}",
+        "torch_threads": a.torch_threads,
         "steps": a.steps,
         "runs": runs,
         "reached": sum(r["target_reached"] for r in runs),
@@ -73,7 +92,7 @@ def write(a: argparse.Namespace, runs: list[dict]) -> dict:
         },
     }
     a.out.parent.mkdir(parents=True, exist_ok=True)
-    a.out.write_text(json.dumps(out, indent=1) + "\n")
+    atomic_write_text(a.out, json.dumps(out, indent=1) + "\n")
     return out
 
 
