@@ -579,3 +579,38 @@ def test_ppo_rejax_settings_reach_the_sb3_model():
     assert plain.model.max_grad_norm == 0.5
     assert plain.model.policy.action_net.weight.abs().max() < 0.05
     assert type(plain.model.policy.optimizer) is torch.optim.Adam
+
+
+def test_a_replan_round_whose_obstacles_block_the_target_has_no_path():
+    """Algorithm 2 with a deep learner: when a re-plan round's new obstacles leave its target
+    blocked, the core refuses to build that round's env; the round then has no path (and
+    Algorithm 2 fails there) instead of the error ending the whole study. Any other invalid
+    argument still raises."""
+    from types import SimpleNamespace
+
+    from sixaxis_avoid.benchmark.learners import Learner, RetrainPerRound, RunContext
+
+    class Refused(Learner):
+        name = "refused"
+        message = "invalid argument `target` = [0, 3, 0]: is blocked"
+
+        def learn(self, ctx):
+            raise sa.InvalidArgumentError(self.message)
+
+        def greedy_path(self, world):  # pragma: no cover - learn always raises
+            raise AssertionError("no path is asked for after a refused round")
+
+    base = sa.Scenario.load("paper_simple")
+    task = SimpleNamespace(scenario=base)
+    ctx = RunContext(task, 0, 1000, {}, [], Refused())
+    # A re-plan round: the same world with one more obstacle (next to the target).
+    d = base.to_dict()
+    d["obstacles"] = [*d["obstacles"], [0, 2, 0]]
+    round_world = sa.Scenario.from_dict(d)
+    assert RetrainPerRound(ctx.learner, ctx).learn_path(round_world, 0) == {
+        "path": None,
+        "total_steps": 0,
+    }
+    Refused.message = "invalid argument `reward_scale` = -1: must be >= 0"
+    with pytest.raises(sa.InvalidArgumentError, match="reward_scale"):
+        RetrainPerRound(ctx.learner, ctx).learn_path(round_world, 0)
