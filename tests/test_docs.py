@@ -147,3 +147,18 @@ def test_sync_copies_a_changed_section(tmp_path):
     readme.write_text("<!-- u:begin -->\nx\n<!-- u:end -->\n")
     with pytest.raises(SystemExit, match="'u': found in no page"):
         ds.sync(readme, [page])
+
+
+def test_readme_ppo_example_claims_what_its_seed_study_measured():
+    """README's PPO example says on how many seeds its settings reach the 9-move path; the
+    figure is the one docs/results/readme-ppo-seeds.json records (scripts/readme_ppo_seeds.py),
+    and the study ran the README's settings (200,000 steps)."""
+    import json
+
+    readme = (ROOT / "README.md").read_text()
+    m = re.search(r"on (\d+) of (\d+) seeds here", readme)
+    assert m, "README's PPO example no longer says on how many seeds it reaches the target"
+    study = json.loads((ROOT / "docs" / "results" / "readme-ppo-seeds.json").read_text())
+    assert (int(m.group(1)), int(m.group(2))) == (study["shortest"], len(study["runs"]))
+    assert study["steps"] == 200_000 and "200_000" in readme
+    assert "3e-4 * progress" in readme

@@ -17,7 +17,15 @@ def test_readme_ppo_example_reaches_the_target_on_the_shortest_path():
     from stable_baselines3 import PPO
 
     venv = SixAxisVecEnv(8, seed=0, reward_scale=1e-4, max_episode_steps=200)
-    model = PPO("MlpPolicy", venv, n_steps=256, ent_coef=0.01, seed=0, device="cpu")
+    model = PPO(
+        "MlpPolicy",
+        venv,
+        n_steps=256,
+        ent_coef=0.01,
+        seed=0,
+        learning_rate=lambda progress: 3e-4 * progress,  # decays to 0
+        device="cpu",
+    )
     model.learn(total_timesteps=200_000)
 
     env = sixaxis_avoid.make(reward_scale=1e-4, max_episode_steps=200)
