@@ -1,7 +1,7 @@
 """PPO's implementation variants: what SB3's PPO does differently from rejax 0.1.3's (the
 ``jax_ppo`` learner) with the same hyperparameters, each as a setting of the benchmark's SB3
 ``ppo`` learner, and the preset ``implementation: rejax`` that makes SB3 PPO do what rejax
-does (docs/BENCHMARKS.md, "JAX against SB3": the ablation that found which of them matters).
+does (docs/BENCHMARKS.md, *JAX against SB3*: the ablation that found which of them matters).
 
 Entry points: :data:`PPO_IMPLEMENTATION` (the settings and their choices),
 :data:`PPO_IMPLEMENTATIONS` (the named presets), :func:`expand_ppo_implementation` and
