@@ -506,11 +506,11 @@ def test_ppo_implementation_rejax_is_one_preset_and_v2_uses_it_with_jax_ppos_val
     contradicts the preset is an error."""
     from sixaxis_avoid.benchmark.learners import (
         PPO_IMPLEMENTATIONS,
-        check_ppo_implementation,
-        expand_ppo_implementation,
+        check_implementation,
+        expand_implementation,
     )
 
-    hp = expand_ppo_implementation({"clip_range": 0.3, "implementation": "rejax"})
+    hp = expand_implementation("ppo", {"clip_range": 0.3, "implementation": "rejax"})
     assert hp == {
         "clip_range": 0.3,
         "init": "lecun",
@@ -518,14 +518,14 @@ def test_ppo_implementation_rejax_is_one_preset_and_v2_uses_it_with_jax_ppos_val
         "bootstrap_truncated": False,
         "clip_range_vf": 0.3,
     }
-    assert expand_ppo_implementation({"init": "lecun"}) == {"init": "lecun"}  # no preset
-    assert check_ppo_implementation({}) == PPO_IMPLEMENTATIONS["sb3"]
+    assert expand_implementation("ppo", {"init": "lecun"}) == {"init": "lecun"}  # no preset
+    assert check_implementation("ppo", {}) == PPO_IMPLEMENTATIONS["sb3"]
     with pytest.raises(LearnerError, match="contradicts implementation 'rejax'"):
-        expand_ppo_implementation({"implementation": "rejax", "init": "orthogonal"})
+        expand_implementation("ppo", {"implementation": "rejax", "init": "orthogonal"})
     with pytest.raises(LearnerError, match="implementation: 'cleanrl'"):
-        expand_ppo_implementation({"implementation": "cleanrl"})
+        expand_implementation("ppo", {"implementation": "cleanrl"})
     with pytest.raises(LearnerError, match="init: 'xavier'"):
-        check_ppo_implementation({"init": "xavier"})
+        check_implementation("ppo", {"init": "xavier"})
     data = json.loads(hpmod.hyperparams_path("v2").read_text())["learners"]
     ppo = data["ppo"]["by_budget"]["30000"]["values"]
     jax = data["jax_ppo"]["by_budget"]["30000"]["values"]
@@ -614,3 +614,61 @@ def test_a_replan_round_whose_obstacles_block_the_target_has_no_path():
     Refused.message = "invalid argument `reward_scale` = -1: must be >= 0"
     with pytest.raises(sa.InvalidArgumentError, match="reward_scale"):
         RetrainPerRound(ctx.learner, ctx).learn_path(round_world, 0)
+
+
+def test_dqn_implementation_rejax_runs_train_freq_envs_and_v2_uses_it_with_jax_dqns_values():
+    """``implementation: rejax`` for SB3 DQN: LeCun init, truncation as termination, no HER,
+    and rejax's ``train_freq`` envs stepped once between update phases (SB3 gets n_envs =
+    train_freq, train_freq 1); suite v2's SB3 DQN at 30k runs jax_dqn's values with it."""
+    from sixaxis_avoid.benchmark.learners import (
+        DQN,
+        DQN_IMPLEMENTATIONS,
+        check_implementation,
+        expand_implementation,
+    )
+
+    hp = DQN().expand_hyperparams(
+        {"train_freq": 16, "gradient_steps": 4, "implementation": "rejax"}
+    )
+    assert (hp["n_envs"], hp["train_freq"], hp["gradient_steps"]) == (16, 1, 4)
+    assert {k: hp[k] for k in DQN_IMPLEMENTATIONS["rejax"]} == DQN_IMPLEMENTATIONS["rejax"]
+    assert DQN().expand_hyperparams({"train_freq": 16}) == {"train_freq": 16}  # SB3's own
+    assert check_implementation("dqn", {}) == DQN_IMPLEMENTATIONS["sb3"]
+    with pytest.raises(LearnerError, match="n_envs: 4 with train_freq_as_envs"):
+        DQN().expand_hyperparams({"n_envs": 4, "train_freq_as_envs": True})
+    with pytest.raises(LearnerError, match="her: 'yes' is not one of"):
+        check_implementation("dqn", {"her": "yes"})
+    with pytest.raises(LearnerError, match="contradicts implementation 'rejax'"):
+        expand_implementation("dqn", {"implementation": "rejax", "her": True})
+    data = json.loads(hpmod.hyperparams_path("v2").read_text())["learners"]
+    dqn = data["dqn"]["by_budget"]["30000"]["values"]
+    jax = data["jax_dqn"]["by_budget"]["30000"]["values"]
+    assert dqn.pop("implementation") == "rejax"
+    # jax_dqn's values in SB3's names (SB3's DQN is ReLU, as jax_dqn's activation).
+    assert dqn == {k: v for k, v in jax.items() if k != "activation"}
+    assert jax["activation"] == "relu"
+
+
+def test_dqn_rejax_implementation_trains_on_a_goal_task_without_her(tmp_path):
+    """The preset reaches the model: 16 native envs with train_freq 1, plain replay on a goal
+    task; and its init gives LeCun weights, zero biases and a target net that copies them."""
+    from sixaxis_avoid.benchmark.learners import DQN, RunContext
+
+    task = load_suite("v2").task("goal-paper_simple")
+    hp = {**DQN.defaults, "implementation": "rejax", "train_freq": 16, "gradient_steps": 1,
+          "learning_starts": 0, "buffer_size": 2000}  # fmt: skip
+    learner = DQN(hp)
+    ctx = RunContext(task, 0, 640, learner.hyperparams, [640], learner)
+    learner.learn(ctx)
+    model = learner.model
+    assert model.n_envs == 16 and model.train_freq.frequency == 1
+    assert type(model.replay_buffer).__name__ == "DictReplayBuffer"  # not HerReplayBuffer
+    assert learner.vec_env == "SixAxisVecEnv"
+    # The init on a fresh model: LeCun weights, zero biases, the target net a copy.
+    fresh = type(model)("MultiInputPolicy", model.env, seed=1, device="cpu")
+    learner.after_model({"init": "lecun"}, fresh)
+    q, target = fresh.policy.q_net, fresh.policy.q_net_target
+    for (name, a), b in zip(q.named_parameters(), target.parameters()):
+        assert (a == b).all()
+        if name.endswith("bias"):
+            assert (a == 0).all()

@@ -52,7 +52,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.algorithm2",
     "sixaxis_avoid.benchmark.vec_env",
     "sixaxis_avoid.benchmark.errors",
-    "sixaxis_avoid.benchmark.ppo_implementation",
+    "sixaxis_avoid.benchmark.implementation",
     "sixaxis_avoid.benchmark.learners",
     "sixaxis_avoid.benchmark.runner",
     # The JAX learners build on the learners and the runner's records; the runner reaches

@@ -33,24 +33,32 @@ import gymnasium as gym
 import numpy as np
 
 from sixaxis_avoid.benchmark.errors import LearnerError
-from sixaxis_avoid.benchmark.ppo_implementation import (
+from sixaxis_avoid.benchmark.implementation import (
+    DQN_IMPLEMENTATION,
+    DQN_IMPLEMENTATIONS,
+    IMPLEMENTATIONS,
     PPO_IMPLEMENTATION,
     PPO_IMPLEMENTATIONS,
-    check_ppo_implementation,
-    expand_ppo_implementation,
+    check_implementation,
+    expand_implementation,
     lecun_init,
     per_network_clipping,
+    train_freq_as_envs,
     truncation_as_termination,
 )
 
-__all__ = [  # the PPO implementation names stay importable from here, where they were first
+__all__ = [  # the implementation names stay importable from here, where they were first
+    "DQN_IMPLEMENTATION",
+    "DQN_IMPLEMENTATIONS",
+    "IMPLEMENTATIONS",
     "PPO_IMPLEMENTATION",
     "PPO_IMPLEMENTATIONS",
     "LearnerError",
-    "check_ppo_implementation",
-    "expand_ppo_implementation",
+    "check_implementation",
+    "expand_implementation",
     "lecun_init",
     "per_network_clipping",
+    "train_freq_as_envs",
     "truncation_as_termination",
 ]
 
@@ -683,7 +691,7 @@ class SB3Learner(Learner):
             raise LearnerError(
                 f"lr_schedule: {schedule!r} is not a schedule (use 'constant' or 'linear')"
             )
-        if self._goal and self.off_policy:
+        if self._goal and self.off_policy and impl.get("her", True):
             from stable_baselines3 import HerReplayBuffer
 
             # HER cannot sample before an episode has ended: learning starts after one.
@@ -716,13 +724,19 @@ class SB3Learner(Learner):
         self.model.learn(total_timesteps=whole_iterations(ctx.budget, n_steps * self.model.n_envs))
         vec.close()
 
-    #: Hyperparameters that choose between implementation variants rather than set SB3
-    #: arguments (PPO: the rejax-equivalent settings, :data:`PPO_IMPLEMENTATION`).
-    implementation_keys: ClassVar[tuple[str, ...]] = ()
+    #: The algorithm's implementation variants (:data:`IMPLEMENTATIONS` key: "ppo", "dqn"),
+    #: hyperparameters that choose between them rather than set SB3 arguments.
+    implementation: ClassVar[str | None] = None
+
+    @property
+    def implementation_keys(self) -> tuple[str, ...]:
+        return () if self.implementation is None else tuple(IMPLEMENTATIONS[self.implementation][0])
 
     def expand_hyperparams(self, hp: dict[str, Any]) -> dict[str, Any]:
         """``hp`` with any preset it names replaced by the preset's values."""
-        return hp
+        if self.implementation is None:
+            return hp
+        return expand_implementation(self.implementation, hp)
 
     def before_model(
         self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
@@ -750,6 +764,27 @@ class DQN(SB3Learner):
     algorithm_path = "stable_baselines3:DQN"
     off_policy = True
     defaults = DQN_DEFAULTS
+    implementation = "dqn"
+
+    def expand_hyperparams(self, hp: dict[str, Any]) -> dict[str, Any]:
+        hp = super().expand_hyperparams(hp)
+        if check_implementation("dqn", {k: hp[k] for k in DQN_IMPLEMENTATION if k in hp})[
+            "train_freq_as_envs"
+        ]:
+            hp = train_freq_as_envs(hp)
+        return hp
+
+    def before_model(
+        self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
+    ) -> tuple[Any, dict[str, Any]]:
+        if not check_implementation("dqn", impl)["bootstrap_truncated"]:
+            vec = truncation_as_termination(vec)
+        return vec, policy_kwargs
+
+    def after_model(self, impl: dict[str, Any], model: Any) -> None:
+        if check_implementation("dqn", impl)["init"] == "lecun":
+            lecun_init(model.policy.q_net)
+            model.policy.q_net_target.load_state_dict(model.policy.q_net.state_dict())
 
 
 class QRDQN(SB3Learner):
@@ -765,15 +800,12 @@ class PPO(SB3Learner):
     title = "Stable-Baselines3 PPO"
     algorithm_path = "stable_baselines3:PPO"
     defaults = PPO_DEFAULTS
-    implementation_keys = tuple(PPO_IMPLEMENTATION)
-
-    def expand_hyperparams(self, hp: dict[str, Any]) -> dict[str, Any]:
-        return expand_ppo_implementation(hp)
+    implementation = "ppo"
 
     def before_model(
         self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
     ) -> tuple[Any, dict[str, Any]]:
-        impl = check_ppo_implementation(impl)
+        impl = check_implementation("ppo", impl)
         if impl["init"] != "orthogonal":
             policy_kwargs = {**policy_kwargs, "ortho_init": False}  # lecun: re-initialised below
         if not impl["bootstrap_truncated"]:
@@ -781,7 +813,7 @@ class PPO(SB3Learner):
         return vec, policy_kwargs
 
     def after_model(self, impl: dict[str, Any], model: Any) -> None:
-        impl = check_ppo_implementation(impl)
+        impl = check_implementation("ppo", impl)
         if impl["init"] == "lecun":
             lecun_init(model.policy)
         if impl["grad_clip"] == "per_network":

@@ -36,6 +36,20 @@ REPRODUCTION = ("q_paper",)
 HEADLINE_SECTION = "benchmark-headline"
 
 
+#: What an SB3 learner's ``implementation: rejax`` is, for the headline's note
+#: (``learners.IMPLEMENTATIONS``).
+IMPLEMENTATION_NOTES = {
+    "ppo": "`learners.PPO_IMPLEMENTATIONS`: SB3 PPO with rejax 0.1.3's initialisation, "
+    "gradient clipping per network, truncation as termination and value clipping, the "
+    "implementation jax_ppo's values were tuned on; with SB3's own they starve its actor: "
+    "*JAX against SB3*, the ablation",
+    "dqn": "`learners.DQN_IMPLEMENTATIONS`: SB3 DQN with rejax 0.1.3's initialisation, "
+    "truncation as termination, train_freq envs stepped once between update phases and "
+    "plain replay (no HER) on the goal task, the implementation jax_dqn's values were "
+    "tuned on",
+}
+
+
 def fmt_ci(point: float, ci: list[float], digits: int = 3) -> str:
     """``0.800 [0.733, 0.867]``; a zero-width interval (every resample the same: all runs
     scored alike) reads ``1.000 (all equal)``, not as certainty."""
@@ -526,12 +540,11 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             L += [
                 "**Implementation**: "
                 + "; ".join(
-                    f"{lr} runs with `implementation: {', '.join(v)}`" for lr, v in impl.items()
+                    f"{lr} runs with `implementation: {', '.join(v)}`"
+                    + (f" ({IMPLEMENTATION_NOTES[lr]})" if lr in IMPLEMENTATION_NOTES else "")
+                    for lr, v in impl.items()
                 )
-                + " (`learners.PPO_IMPLEMENTATIONS`: SB3 PPO with rejax 0.1.3's initialisation, "
-                "gradient clipping per network, truncation as termination and value clipping, "
-                "the implementation jax_ppo's values were tuned on; with SB3's own they starve "
-                "its actor: *JAX against SB3*, the ablation).",
+                + ".",
                 "",
             ]
         if a["over_budget"]:
