@@ -292,18 +292,20 @@ class RetrainPerRound:
         else:
             import sixaxis_avoid as sa
 
+            try:
+                scenario.validate()
+            except sa.ScenarioError as e:
+                if e.field != "target":
+                    raise
+                # The round's new obstacles block the target (a path cell next to it on a
+                # fine grid, within terminal_safe_distance): no env can be built, so there is
+                # no path in this world, and Algorithm 2 fails.
+                return {"path": None, "total_steps": 0}
             fresh = type(self.learner)(self.learner.hyperparams)
             ctx = RunContext(
                 self.ctx.task, seed, self.ctx.budget, fresh.hyperparams, [], fresh, scenario
             )
-            try:
-                fresh.learn(ctx)
-            except sa.InvalidArgumentError as e:
-                if "`target`" not in str(e):
-                    raise
-                # The round's new obstacles block the target (a path cell next to it on a
-                # fine grid): no env, no path in this world, and Algorithm 2 fails.
-                return {"path": None, "total_steps": 0}
+            fresh.learn(ctx)
             path, steps = fresh.greedy_path(scenario), ctx.env_steps
         cells = None if path is None else [tuple(int(v) for v in c) for c in path]
         return {"path": cells, "total_steps": int(steps)}
