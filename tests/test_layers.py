@@ -53,6 +53,8 @@ LAYERS = [
     "sixaxis_avoid.benchmark.vec_env",
     "sixaxis_avoid.benchmark.errors",
     "sixaxis_avoid.benchmark.implementation",
+    "sixaxis_avoid.benchmark.interface",
+    "sixaxis_avoid.benchmark.sb3_learners",
     "sixaxis_avoid.benchmark.learners",
     "sixaxis_avoid.benchmark.runner",
     # The JAX learners build on the learners and the runner's records; the runner reaches
