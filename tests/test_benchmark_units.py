@@ -680,3 +680,38 @@ def test_dqn_rejax_implementation_trains_on_a_goal_task_without_her(tmp_path):
         assert (a == b).all()
         if name.endswith("bias"):
             assert (a == 0).all()
+
+
+def test_dqn_squared_loss_is_half_the_squared_td_error_where_sb3s_is_huber():
+    """``loss: squared`` (rejax's ``optax.l2_loss``) replaces SB3 DQN's Huber loss: on the
+    same replay sample, the recorded loss is half the mean squared TD error against the
+    target net's max, and it differs from SB3's own where TD errors pass 1."""
+    import torch
+    from sixaxis_avoid.benchmark.learners import squared_error_updates
+    from sixaxis_avoid.sb3 import SixAxisVecEnv
+    from stable_baselines3 import DQN as SB3DQN
+    from stable_baselines3.common.logger import Logger
+
+    vec = SixAxisVecEnv(4, seed=0, reward_scale=1e-4, max_episode_steps=50)
+    model = SB3DQN("MlpPolicy", vec, learning_starts=10_000, seed=0, device="cpu")
+    model.set_logger(Logger(None, []))
+    model.learn(400)  # fills the replay buffer, no update yet
+
+    def expected(batch):
+        with torch.no_grad():
+            next_q = model.q_net_target(batch.next_observations).max(dim=1).values
+            target = batch.rewards + (1 - batch.dones) * model.gamma * next_q.reshape(-1, 1)
+            q = torch.gather(model.q_net(batch.observations), 1, batch.actions.long())
+            return float(0.5 * ((q - target) ** 2).mean()), float((q - target).abs().max())
+
+    np.random.seed(7)  # noqa: NPY002 - SB3 replay buffers sample from the global RNG
+    want, worst = expected(model.replay_buffer.sample(32))
+    model.learning_rate, model.lr_schedule = 0.0, lambda _: 0.0  # measure, do not move
+    np.random.seed(7)  # noqa: NPY002 - SB3 replay buffers sample from the global RNG
+    model.train(1, 32)
+    huber = model.logger.name_to_value["train/loss"]
+    squared_error_updates(model)
+    np.random.seed(7)  # noqa: NPY002 - SB3 replay buffers sample from the global RNG
+    model.train(1, 32)
+    assert model.logger.name_to_value["train/loss"] == pytest.approx(want, rel=1e-5)
+    assert worst > 1 and huber < want  # the rewards scaled by 1e-4 still give TD errors > 1

@@ -43,10 +43,10 @@ IMPLEMENTATION_NOTES = {
     "gradient clipping per network, truncation as termination and value clipping, the "
     "implementation jax_ppo's values were tuned on; with SB3's own they starve its actor: "
     "*JAX against SB3*, the ablation",
-    "dqn": "`learners.DQN_IMPLEMENTATIONS`: SB3 DQN with rejax 0.1.3's initialisation, "
-    "truncation as termination, train_freq envs stepped once between update phases and "
-    "plain replay (no HER) on the goal task, the implementation jax_dqn's values were "
-    "tuned on",
+    "dqn": "`learners.DQN_IMPLEMENTATIONS`: SB3 DQN with rejax 0.1.3's squared TD-error "
+    "loss, initialisation, truncation as termination, train_freq envs stepped once between "
+    "update phases and plain replay (no HER) on the goal task, the implementation jax_dqn's "
+    "values were tuned on; with SB3's Huber loss they fail: *JAX against SB3*",
 }
 
 

@@ -23,6 +23,7 @@ from sixaxis_avoid.benchmark.implementation import (
     expand_implementation,
     lecun_init,
     per_network_clipping,
+    squared_error_updates,
     train_freq_as_envs,
     truncation_as_termination,
 )
@@ -223,9 +224,12 @@ class DQN(SB3Learner):
         return vec, policy_kwargs
 
     def after_model(self, impl: dict[str, Any], model: Any) -> None:
-        if check_implementation("dqn", impl)["init"] == "lecun":
+        impl = check_implementation("dqn", impl)
+        if impl["init"] == "lecun":
             lecun_init(model.policy.q_net)
             model.policy.q_net_target.load_state_dict(model.policy.q_net.state_dict())
+        if impl["loss"] == "squared":
+            squared_error_updates(model)
 
 
 class QRDQN(SB3Learner):
