@@ -84,7 +84,7 @@ def test_the_section_is_written_from_the_result_files_and_keeps_the_page(tmp_pat
 
 
 def test_ppo_ablation_section_names_the_cause_from_the_committed_figures():
-    """The v2 PPO ablation (scripts/ppo_ablation.py) renders its table, the gradient-norm
+    """The v2 PPO ablation (scripts/implementation_ablation.py) renders its table, the gradient-norm
     reading of the cause with the file's own figures, and the commands that made it."""
     import json
     from pathlib import Path
