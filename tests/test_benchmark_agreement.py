@@ -47,6 +47,8 @@ def test_sb3_values_are_the_jax_values_less_sb3s_own_activation():
     assert {k: x for k, x in values.items() if k != "activation"} == v
     with pytest.raises(ValueError, match="activation"):
         agreement.sb3_values("dqn", {**values, "activation": "tanh"})
+    assert agreement.sb3_values("ppo", values, "rejax") == {**v, "implementation": "rejax"}
+    assert agreement.parse_args(["--sb3-implementation", "rejax"]).sb3_implementation == "rejax"
 
 
 def test_the_section_is_written_from_the_result_files_and_keeps_the_page(tmp_path):

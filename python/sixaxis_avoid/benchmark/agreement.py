@@ -53,6 +53,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         metavar="NAME=JSON",
         help="a hyperparameter (SB3's name) for both sides, as jax_learners' --set",
     )
+    p.add_argument(
+        "--sb3-implementation",
+        choices=("sb3", "rejax"),
+        default="sb3",
+        help="the SB3 learner's implementation preset (learners.PPO_IMPLEMENTATIONS / "
+        "DQN_IMPLEMENTATIONS): SB3's own, or rejax's, which the JAX side runs",
+    )
     p.add_argument("--skip-sb3", action="store_true", help="JAX side only (a smoke run)")
     p.add_argument("--out", type=Path, default=None, help="JSON file")
     p.add_argument(
@@ -95,10 +102,13 @@ def jax_args(a: argparse.Namespace, task: str) -> argparse.Namespace:
 SB3_ACTIVATION = {"ppo": "tanh", "dqn": "relu"}
 
 
-def sb3_values(algo: str, values: dict[str, Any]) -> dict[str, Any]:
+def sb3_values(algo: str, values: dict[str, Any], implementation: str = "sb3") -> dict[str, Any]:
     """The SB3 learner's hyperparameters: the JAX run's values (already SB3's names) without
-    the activation, which must be SB3's own."""
+    the activation, which must be SB3's own, and with the ``implementation`` preset unless it
+    is SB3's own (``"sb3"``)."""
     out = dict(values)
+    if implementation != "sb3":
+        out["implementation"] = implementation
     act = out.pop("activation", SB3_ACTIVATION[algo])
     if act != SB3_ACTIVATION[algo]:
         raise ValueError(f"activation: {act!r}; SB3's {algo} learner uses {SB3_ACTIVATION[algo]}")
@@ -334,6 +344,11 @@ def markdown(
                 for k in ("algo", "suite", "tasks", "seeds", "budget", "evaluations")
             )
             + "".join(f" --set={x}" for x in f["set"])
+            + (
+                f" --sb3-implementation {impl}"
+                if (impl := f.get("sb3_implementation", "sb3")) != "sb3"
+                else ""
+            )
             + (f" --out {f['out']}" if f.get("out") else "")
         )
         for tid, e in r["tasks"].items():
@@ -344,8 +359,9 @@ def markdown(
             def cell(x: dict[str, Any]) -> str:
                 return f"{x['mean']:.2f} [{x['ci'][0]:.2f}, {x['ci'][1]:.2f}]"
 
+            algo = f["algo"] + (" (rejax impl.)" if impl != "sb3" else "")
             lines.append(
-                f"| {f['algo']} | {tid} | {int(f['budget']):,} "
+                f"| {algo} | {tid} | {int(f['budget']):,} "
                 f"| {len(e['jax']['spl'])} | {cell(g['final']['jax'])} "
                 f"| {cell(g['final']['sb3'])} | {cell(g['auc']['jax'])} "
                 f"| {cell(g['auc']['sb3'])} | {g['final']['permutation_p']:.2f} "
@@ -453,7 +469,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             },
         }
         if not a.skip_sb3:
-            values = sb3_values(a.algo, jr["values"])
+            values = sb3_values(a.algo, jr["values"], a.sb3_implementation)
             rows, walls = [], []
             for seed in jr["seeds"]:
                 curve, wall = sb3_curve(a.algo, task, seed, values, a.budget, points)
