@@ -13,13 +13,15 @@ SB3's implementation and once per factor changed toward rejax 0.1.3's
 (``implementation: rejax``); each variant into its own directory. ``summary`` gathers the
 final scores per variant, task and seed with the JAX learner's committed runs on the same
 tasks and seeds (docs/results/v2) into one JSON, with the commands that made them.
-``merge-v2`` replaces the committed v2 runs of the SB3 learner by a re-run's.
+``merge-v2`` merges a learner's runs made outside the checkout into the committed v2 study
+(replacing a re-run's old ones).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import re
 import shlex
 import subprocess
 import sys
@@ -193,22 +195,34 @@ def summary(algo: str, runs: Path, v2: Path) -> dict:
     return out
 
 
-def merge_v2(algo: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> dict:
-    """Replace suite v2's SB3 ``algo`` runs (``v2``, the committed study) by those of a re-run
-    into ``new`` (outside the checkout): the old run files go, the new ones come in, and
-    the manifest's commands drop the old commands of the learner and gain the new one with its
-    ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did); the
-    total wall time drops the old ppo runs' own wall times and adds the re-run's (and
-    ``extra_wall_s``: earlier attempts into ``new`` that stopped before writing its
-    manifest)."""
-    old_runs = sorted((v2 / "runs").glob(f"*__{algo}__*.json"))
-    new_runs = sorted((new / "runs").glob(f"*__{algo}__*.json"))
-    if {f.name for f in old_runs} != {f.name for f in new_runs}:
-        raise SystemExit(f"{new}: its {algo} runs are not the same set as {v2}'s")
+def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> dict:
+    """Merge a run of ``learner`` into ``new`` (outside the checkout) into suite v2's
+    committed study ``v2``: its run files come in, and the manifest gains its command with
+    the ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did) and
+    its wall time (and ``extra_wall_s``: earlier attempts into ``new`` that stopped before
+    writing its manifest). A re-run replaces the learner's runs at those budgets (the same
+    set of run files, or none yet): the old files go, with their commands and their own wall
+    times."""
+    new_runs = sorted((new / "runs").glob(f"*__{learner}__*.json"))
+    budgets = {f.name.rsplit("__", 1)[1] for f in new_runs}
+    old_runs = sorted(
+        f
+        for f in (v2 / "runs").glob(f"*__{learner}__*.json")
+        if f.name.rsplit("__", 1)[1] in budgets
+    )
+    if old_runs and {f.name for f in old_runs} != {f.name for f in new_runs}:
+        raise SystemExit(f"{new}: its {learner} runs are not the same set as {v2}'s")
     old_wall = sum(json.loads(f.read_text())["timing"]["run_wall_time_s"] for f in old_runs)
     man, fresh = (json.loads((d / "study.json").read_text()) for d in (v2, new))
     command = fresh["command"].replace(f"--out-dir {new}", f"--out-dir {v2}")
-    keep = [c for c in man["commands"] if f"--learners {algo} " not in c]
+    budget_flag = re.search(r"--budgets (\S+)", command)
+    keep = [
+        c
+        for c in man["commands"]
+        if not old_runs
+        or f"--learners {learner} " not in c
+        or (budget_flag is not None and f"--budgets {budget_flag.group(1)}" not in c)
+    ]
     for f in old_runs:
         f.unlink()
     for f in new_runs:
@@ -224,7 +238,12 @@ def merge_v2(algo: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> dict:
             - old_wall
             + fresh["wall_time_s_now"]
             + extra_wall_s,
-            "failures": fresh["failures"],
+            "failures": [*man.get("failures", []), *fresh["failures"]],
+            "learners": [
+                *man["learners"],
+                *[x for x in fresh["learners"] if x not in man["learners"]],
+            ],
+            "runs": man["runs"] - len(old_runs) + len(new_runs),
             **{k: fresh[k] for k in ("date", "machine", "versions", "load_average")},
         }
     )
@@ -242,7 +261,8 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("--runs", type=Path, required=True)
     s.add_argument("--v2", type=Path, default=ROOT / "docs/results/v2")
     s.add_argument("--out", type=Path, required=True)
-    m = sub.add_parser("merge-v2", help="replace docs/results/v2's runs of --algo by a re-run's")
+    m = sub.add_parser("merge-v2", help="merge a learner's runs into docs/results/v2")
+    m.add_argument("--learner", default=None, help="default: --algo (e.g. jax_dqn)")
     m.add_argument("--new", type=Path, required=True, help="the re-run's --out-dir")
     m.add_argument("--v2", type=Path, default=Path("docs/results/v2"))
     m.add_argument(
@@ -255,7 +275,7 @@ def main(argv: list[str] | None = None) -> int:
         q.add_argument("--algo", choices=tuple(ALGOS), default="ppo")
     a = p.parse_args(argv)
     if a.cmd == "merge-v2":
-        print(json.dumps(merge_v2(a.algo, a.new, a.v2, a.extra_wall_s)))
+        print(json.dumps(merge_v2(a.learner or a.algo, a.new, a.v2, a.extra_wall_s)))
         return 0
     if a.cmd == "run":
         for v in (a.variants or ",".join(ALGOS[a.algo]["variants"])).split(","):

@@ -105,3 +105,52 @@ def test_ppo_ablation_section_names_the_cause_from_the_committed_figures():
         < ab["gradnorms"]["vfclip"]["median"]["last third"]["actor_rms_after_clip"]
     )
     assert "implementation: rejax" in text
+
+
+def test_merge_v2_adds_a_new_learners_runs_and_replaces_a_re_run(tmp_path):
+    """scripts/implementation_ablation.py merge-v2: a learner's runs made outside the study
+    come in with their command, wall time and count; a re-run at the same budget replaces the
+    old files and command but keeps other learners' and other budgets' commands."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "implementation_ablation",
+        Path(__file__).resolve().parents[1] / "scripts" / "implementation_ablation.py",
+    )
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+
+    def study(d, learners, commands, runs, wall):
+        (d / "runs").mkdir(parents=True)
+        for name, w in runs:
+            (d / "runs" / name).write_text(json.dumps({"timing": {"run_wall_time_s": w}}))
+        man = {"command": commands[-1], "commands": commands, "learners": learners,
+               "runs": len(runs), "ran_now": len(runs), "skipped_now": 0,
+               "wall_time_s_now": wall, "wall_time_s_total": wall, "failures": [],
+               "date": "d", "machine": "m", "versions": {}, "load_average": [0, 0, 0]}  # fmt: skip
+        (d / "study.json").write_text(json.dumps(man))
+
+    v2, new = tmp_path / "v2", tmp_path / "new"
+    c = "run --learners {} --budgets {} --out-dir {}"
+    old = [("t__jax_dqn__s0__b30000.json", 5.0), ("t__jax_dqn__s0__b100000.json", 7.0)]
+    study(v2, ["jax_dqn"], [c.format("jax_dqn", b, v2) for b in (30000, 100000)], old, 12.0)
+    study(new, ["dqn"], [c.format("dqn", 30000, new)], [("t__dqn__s0__b30000.json", 3.0)], 4.0)
+    out = mod.merge_v2("dqn", new, v2)
+    man = json.loads((v2 / "study.json").read_text())
+    assert out["replaced"] == 1 and man["runs"] == 3 and man["learners"] == ["jax_dqn", "dqn"]
+    assert man["wall_time_s_total"] == 16.0 and man["commands"][-1] == c.format("dqn", 30000, v2)
+    # A re-run of jax_dqn at 30k replaces its 30k runs and command only.
+    new2 = tmp_path / "new2"
+    study(new2, ["jax_dqn"], [c.format("jax_dqn", 30000, new2)],
+          [("t__jax_dqn__s0__b30000.json", 2.0)], 2.5)  # fmt: skip
+    mod.merge_v2("jax_dqn", new2, v2)
+    man = json.loads((v2 / "study.json").read_text())
+    assert man["runs"] == 3 and man["wall_time_s_total"] == 16.0 - 5.0 + 2.5
+    assert man["commands"] == [
+        c.format("jax_dqn", 100000, v2), c.format("dqn", 30000, v2), c.format("jax_dqn", 30000, v2)
+    ]  # fmt: skip
+    (new2 / "runs" / "u__jax_dqn__s0__b30000.json").write_text("{}")
+    with pytest.raises(SystemExit, match="not the same set"):
+        mod.merge_v2("jax_dqn", new2, v2)
