@@ -154,3 +154,23 @@ def test_merge_v2_adds_a_new_learners_runs_and_replaces_a_re_run(tmp_path):
     (new2 / "runs" / "u__jax_dqn__s0__b30000.json").write_text("{}")
     with pytest.raises(SystemExit, match="not the same set"):
         mod.merge_v2("jax_dqn", new2, v2)
+
+
+def test_dqn_ablation_section_reads_the_cause_from_the_committed_figures():
+    """The v2 DQN ablation (scripts/implementation_ablation.py --algo dqn) renders each
+    variant's row and command, and its reading of the cause from the file's own counts: the
+    squared loss alone closes the gap that every other rejax setting leaves open."""
+    import json
+    from pathlib import Path
+
+    path = "docs/results/agreement/dqn-v2-ablation.json"
+    ab = json.loads((Path(__file__).resolve().parents[1] / path).read_text())
+    text = "\n".join(agreement.ablation_markdown(ab, path))
+    assert "### Why SB3 DQN failed with jax_dqn's values" in text
+    for name, row in ab["variants"].items():
+        assert f"| {name} | {row['what']} | {row['mean_spl']:.3f} |" in text
+        assert row["command"] in text
+    sq, hu = ab["variants"]["squared"], ab["variants"]["huber"]
+    assert f"in {sq['successes']}/{sq['runs']} runs" in text
+    assert f"in {hu['successes']}/{hu['runs']}" in text
+    assert sq["successes"] > hu["successes"]  # the reading the section gives
