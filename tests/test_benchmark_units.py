@@ -672,6 +672,7 @@ def test_dqn_rejax_implementation_trains_on_a_goal_task_without_her(tmp_path):
     assert model.n_envs == 16 and model.train_freq.frequency == 1
     assert type(model.replay_buffer).__name__ == "DictReplayBuffer"  # not HerReplayBuffer
     assert learner.vec_env == "SixAxisVecEnv"
+    assert type(model.env).__name__ == "TruncationAsTermination"  # no bootstrap on truncation
     # The init on a fresh model: LeCun weights, zero biases, the target net a copy.
     fresh = type(model)("MultiInputPolicy", model.env, seed=1, device="cpu")
     learner.after_model({"init": "lecun"}, fresh)

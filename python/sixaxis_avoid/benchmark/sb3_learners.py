@@ -183,7 +183,11 @@ class SB3Learner(Learner):
     def before_model(
         self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
     ) -> tuple[Any, dict[str, Any]]:
-        """The VecEnv and policy keywords for the implementation variant ``impl``."""
+        """The VecEnv and policy keywords for the implementation variant ``impl``: every
+        algorithm's ``bootstrap_truncated: False`` (rejax's) takes the truncation flags out."""
+        if self.implementation is not None:
+            if not check_implementation(self.implementation, impl)["bootstrap_truncated"]:
+                vec = truncation_as_termination(vec)
         return vec, policy_kwargs
 
     def after_model(self, impl: dict[str, Any], model: Any) -> None:
@@ -216,13 +220,6 @@ class DQN(SB3Learner):
             hp = train_freq_as_envs(hp)
         return hp
 
-    def before_model(
-        self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
-    ) -> tuple[Any, dict[str, Any]]:
-        if not check_implementation("dqn", impl)["bootstrap_truncated"]:
-            vec = truncation_as_termination(vec)
-        return vec, policy_kwargs
-
     def after_model(self, impl: dict[str, Any], model: Any) -> None:
         impl = check_implementation("dqn", impl)
         if impl["init"] == "lecun":
@@ -250,11 +247,9 @@ class PPO(SB3Learner):
     def before_model(
         self, impl: dict[str, Any], vec: Any, policy_kwargs: dict[str, Any]
     ) -> tuple[Any, dict[str, Any]]:
-        impl = check_implementation("ppo", impl)
-        if impl["init"] != "orthogonal":
+        vec, policy_kwargs = super().before_model(impl, vec, policy_kwargs)
+        if check_implementation("ppo", impl)["init"] != "orthogonal":
             policy_kwargs = {**policy_kwargs, "ortho_init": False}  # lecun: re-initialised below
-        if not impl["bootstrap_truncated"]:
-            vec = truncation_as_termination(vec)
         return vec, policy_kwargs
 
     def after_model(self, impl: dict[str, Any], model: Any) -> None:
