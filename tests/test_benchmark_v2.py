@@ -423,3 +423,29 @@ def test_a_package_hyperparameter_file_is_named_by_its_repository_path(tmp_path,
     assert not shown.startswith("..") and not shown.startswith("/")
     # Any other file: relative to the working directory.
     assert hpmod.display_path(tmp_path / "mine.json") == "mine.json"
+
+
+def test_compute_section_sums_the_runs_and_counts_each_trials_file_once():
+    """The page's *Compute* rows: a learner's runs add up per budget, its tuning time comes
+    from its own trials file, and a learner run with another's values (SB3 DQN with
+    jax_dqn's) has no tuning time of its own."""
+    import json
+
+    from sixaxis_avoid.benchmark import report_v2
+    from sixaxis_avoid.benchmark.hyperparams import HYPERPARAMS_DIR
+
+    def run(learner, family, wall, cpu):
+        return {"spec": {"learner": learner, "family": family, "budget": 30000},
+                "timing": {"run_wall_time_s": wall, "wall_time_s": wall, "cpu_time_s": cpu},
+                "result": {"env_steps": 30000}}  # fmt: skip
+
+    runs = [run("dqn", "deep", 1800.0, 900.0), run("dqn", "deep", 1800.0, 900.0),
+            run("jax_dqn", "jax", 360.0, 36.0)]  # fmt: skip
+    text = "\n".join(report_v2.compute_rows({"suite": load_suite("v2"), "runs": runs}))
+    trials = json.loads(
+        (HYPERPARAMS_DIR.parents[3] / "docs/results/v2-tuning/jax_dqn-30000.json").read_text()
+    )
+    tw, tc = trials["wall_time_s"] / 3600, trials["cpu_time_s"] / 3600
+    assert "| dqn | 30k | — | — | 1.00 | 0.50 |" in text
+    assert f"| jax_dqn | 30k | {tw:.2f} | {tc:.2f} | 0.10 | 0.01 |" in text
+    assert f"jax {tw + 0.1:.2f} h wall" in text and "deep 1.00 h wall, 0.50 h CPU" in text
