@@ -377,8 +377,9 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
         e = rows.setdefault(
             key, {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0}
         )
-        e["wall"] += float(r["timing"].get("run_wall_time_s", r["timing"]["wall_time_s"]))
-        e["cpu"] += float(r["timing"]["cpu_time_s"])
+        timing = r.get("timing", {})  # a run file without timing adds nothing
+        e["wall"] += float(timing.get("run_wall_time_s", timing.get("wall_time_s", 0.0)))
+        e["cpu"] += float(timing.get("cpu_time_s", 0.0))
     seen: set[Path] = set()
     for lr, entry in data.get("learners", {}).items():
         for b, e in entry.get("by_budget", {}).items():
