@@ -25,6 +25,7 @@ import numpy as np
 from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
+from sixaxis_avoid.benchmark.report_compute import compute_rows
 from sixaxis_avoid.benchmark.runner import load_runs
 from sixaxis_avoid.benchmark.stats import fmt_steps
 from sixaxis_avoid.benchmark.tasks import Suite, load_suite
@@ -351,84 +352,6 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
             )
     if not learners:
         out.append("| (none yet) | — | **untuned** | — | — | — |")
-    return out
-
-
-def _trials_file(path: str) -> Path | None:
-    """A tuning record's trials file, by its path from the working directory or from the
-    repository (as the hyperparameter file records it)."""
-    for p in (Path(path), hpmod.HYPERPARAMS_DIR.parents[3] / path):
-        if p.is_file():
-            return p
-    return None
-
-
-def compute_rows(a: dict[str, Any]) -> list[str]:
-    """What the study cost, per learner and budget: its tuning search's wall and CPU time
-    (each trials file counted once, for the learner it tuned) and its runs' wall time and
-    training CPU time (a JAX run's are its share of its vmapped group's), with the totals per
-    family of learner."""
-    data = hpmod.load(a["suite"].raw.get("hyperparams", a["suite"].name))
-    rows: dict[tuple[str, int], dict[str, float]] = {}
-    family: dict[str, str] = {}
-    for r in a["runs"]:
-        key = (r["spec"]["learner"], stats.budget_of_run(r))
-        family[key[0]] = r["spec"]["family"]
-        e = rows.setdefault(
-            key, {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0}
-        )
-        timing = r.get("timing", {})  # a run file without timing adds nothing
-        e["wall"] += float(timing.get("run_wall_time_s", timing.get("wall_time_s", 0.0)))
-        e["cpu"] += float(timing.get("cpu_time_s", 0.0))
-    seen: set[Path] = set()
-    for lr, entry in data.get("learners", {}).items():
-        for b, e in entry.get("by_budget", {}).items():
-            f = _trials_file(e["trials"]) if e.get("trials") else None
-            if f is None or f.resolve() in seen:
-                continue
-            t = json.loads(f.read_text())
-            if t.get("learner", lr) != lr or "wall_time_s" not in t:
-                continue
-            seen.add(f.resolve())
-            row = rows.setdefault(
-                (lr, int(b)),
-                {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0},
-            )
-            row["tuned"] = 1.0
-            row["tune_wall"] += float(t["wall_time_s"])
-            row["tune_cpu"] += float(t.get("cpu_time_s", 0.0))
-    if not rows:
-        return []
-
-    def h(x: float) -> str:
-        return f"{x / 3600:.2f}"
-
-    out = [
-        "## Compute",
-        "",
-        "Hours per learner and budget, from the trials files of the tuning record and the run "
-        "files: tuning wall and CPU time, and the runs' wall time (one process per run; a JAX "
-        "run's share of its vmapped group's) and training CPU time (evaluation excluded). The "
-        "runs shared the machine with other work, so wall times are upper bounds. —: no "
-        "search of its own (another learner's values, or nothing to tune).",
-        "",
-        "| learner | budget | tuning wall (h) | tuning CPU (h) | runs wall (h) | runs CPU (h) |",
-        "|---|---|---|---|---|---|",
-    ]
-    totals: dict[str, list[float]] = {}
-    for (lr, b), e in sorted(rows.items(), key=lambda kv: (kv[0][0], kv[0][1])):
-        tune = f"{h(e['tune_wall'])} | {h(e['tune_cpu'])}" if e["tuned"] else "— | —"
-        out.append(f"| {lr} | {fmt_steps(b)} | {tune} | {h(e['wall'])} | {h(e['cpu'])} |")
-        t = totals.setdefault(family.get(lr, "?"), [0.0, 0.0])
-        t[0] += e["tune_wall"] + e["wall"]
-        t[1] += e["tune_cpu"] + e["cpu"]
-    out += [
-        "",
-        "Per family, tuning and runs: "
-        + "; ".join(f"{fam} {h(w)} h wall, {h(c)} h CPU" for fam, (w, c) in sorted(totals.items()))
-        + ".",
-        "",
-    ]
     return out
 
 
