@@ -15,6 +15,10 @@ from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark.stats import fmt_steps
 
+#: A (learner, budget) row before anything is added: ``tuned`` is 1 once a trials file of
+#: its own is read; times in seconds.
+ZERO = {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0}
+
 
 def _trials_file(path: str) -> Path | None:
     """A tuning record's trials file, by its path from the working directory or from the
@@ -36,9 +40,7 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
     for r in a["runs"]:
         key = (r["spec"]["learner"], stats.budget_of_run(r))
         family[key[0]] = r["spec"]["family"]
-        e = rows.setdefault(
-            key, {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0}
-        )
+        e = rows.setdefault(key, dict(ZERO))
         timing = r.get("timing", {})  # a run file without timing adds nothing
         e["wall"] += float(timing.get("run_wall_time_s", timing.get("wall_time_s", 0.0)))
         e["cpu"] += float(timing.get("cpu_time_s", 0.0))
@@ -52,10 +54,7 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
             if t.get("learner", lr) != lr or "wall_time_s" not in t:
                 continue
             seen.add(f.resolve())
-            row = rows.setdefault(
-                (lr, int(b)),
-                {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0},
-            )
+            row = rows.setdefault((lr, int(b)), dict(ZERO))
             row["tuned"] = 1.0
             row["tune_wall"] += float(t["wall_time_s"])
             row["tune_cpu"] += float(t.get("cpu_time_s", 0.0))
