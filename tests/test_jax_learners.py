@@ -125,6 +125,36 @@ def test_bad_values_name_the_field_and_value():
         jax_learners.check_values("dqn", {"n_envs": 4})
     with pytest.raises(jax_learners.JaxLearnerError, match=r"gamma: 1.5"):
         jax_learners.check_values("dqn", {"gamma": 1.5})
+    with pytest.raises(jax_learners.JaxLearnerError, match=r"replay_sample: 'prioritised'"):
+        jax_learners.check_values("dqn", {"replay_sample": "prioritised"})
+
+
+def test_dqn_draw_with_replacement_samples_stored_transitions_only():
+    # SB3's draw: uniform with replacement over the transitions stored so far, never an
+    # unwritten slot; rejax's draw stays the default (the committed 30k studies used it).
+    assert jax_learners.DQN_DEFAULTS["replay_sample"] == "without_replacement"
+    dqn = jax_learners.rejax_classes()["dqn"]
+    task = load_suite("v1").task("paper_simple")
+    values = jax_learners.check_values("dqn", {**TINY_DQN, "replay_sample": "with_replacement"})
+    comp = jax_learners.compiled_group("dqn", task, values, 400, [400])
+    assert comp.base.replay_with_replacement and isinstance(comp.base, dqn)
+    ts = comp.base.init_state(jax.random.PRNGKey(0))
+    buf = ts.replay_buffer
+    assert type(buf).__name__ == "UniformReplayBuffer" and buf.size == 1000
+    # 7 transitions stored (rewards 1..7); 4096 draws of 64 hit each of them and nothing else.
+    rewards = buf.data.reward.at[:7].set(np.arange(1, 8, dtype=np.float32)).at[7:].set(-1.0)
+    buf = buf.replace(data=buf.data._replace(reward=rewards), index=7)
+    drawn = np.concatenate(
+        [np.asarray(buf.sample(64, k).reward) for k in jax.random.split(jax.random.PRNGKey(1), 64)]
+    )
+    assert set(drawn.tolist()) == set(range(1, 8))
+    # With replacement: one batch of 64 from 7 transitions repeats some.
+    assert len(set(np.asarray(buf.sample(64, jax.random.PRNGKey(2)).reward).tolist())) <= 7
+    # The draw is a static knob: another compiled group; both train and evaluate.
+    rejax_values = jax_learners.check_values("dqn", TINY_DQN)
+    assert jax_learners.static_key("dqn", values) != jax_learners.static_key("dqn", rejax_values)
+    r = comp.run([values], [0, 1])
+    assert r["out"]["spl"].shape == (1, 2, 1) and (r["out"]["episodes"] > 0).all()
 
 
 def test_random_search_space_has_schedules_and_few_compiled_groups():
@@ -133,6 +163,32 @@ def test_random_search_space_has_schedules_and_few_compiled_groups():
     assert {c["lr_schedule"] for c in cands} == {"constant", "linear"}
     assert len({jax_learners.static_key("ppo", c) for c in cands}) <= 2
     assert len({c["learning_rate"] for c in cands}) == 32
+
+
+def test_tuner_set_fixes_a_value_and_keeps_the_other_draws(tmp_path, monkeypatch):
+    seen = {}
+
+    def fake_tune(algo, suite, budget, candidates, seeds, tasks, log=None):
+        seen["candidates"] = candidates
+        raise SystemExit(0)  # the draw is what is under test
+
+    monkeypatch.setattr(jax_tune, "tune", fake_tune)
+    with pytest.raises(SystemExit):
+        jax_tune.main([
+            "--algo", "dqn", "--suite", "v2", "--budget", "1000", "--trials", "32",
+            "--set", 'replay_sample="with_replacement"', "--set", "gamma=0.9",
+            "--out", str(tmp_path / "t.json"), "--hyperparams", str(tmp_path / "hp.json"),
+        ])  # fmt: skip
+    drawn = jax_tune.draw("dqn", 32, 2, seed=0)
+    got = seen["candidates"]
+    assert [c["replay_sample"] for c in got] == ["with_replacement"] * 32
+    assert [c["gamma"] for c in got] == [0.9] * 32
+    rest = [{k: v for k, v in c.items() if k not in ("replay_sample", "gamma")} for c in got]
+    assert rest == [{k: v for k, v in c.items() if k not in ("replay_sample", "gamma")}
+                    for c in drawn]  # fmt: skip
+    with pytest.raises(jax_learners.JaxLearnerError, match=r"replay_sample: 'x'"):
+        jax_tune.main(["--algo", "dqn", "--budget", "1000", "--set", "replay_sample=x",
+                       "--out", str(tmp_path / "t.json")])  # fmt: skip
 
 
 def test_tuner_writes_every_trial_and_merges_the_best(tmp_path, monkeypatch):

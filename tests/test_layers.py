@@ -63,6 +63,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.jax_learners",
     "sixaxis_avoid.benchmark.jax_runs",
     "sixaxis_avoid.benchmark.jax_tune",
+    "sixaxis_avoid.benchmark.borrow",
     "sixaxis_avoid.benchmark.agreement",
     "sixaxis_avoid.benchmark.longer",
     "sixaxis_avoid.benchmark.report",

@@ -94,7 +94,10 @@ def _rejax_classes() -> dict[str, Any]:
     - gradients are clipped by their global norm (SB3's ``max_grad_norm``; rejax 0.1.3 clips
       each element, ``optax.clip``); PPO's Adam has SB3's eps 1e-5;
     - DQN: any hidden layers (rejax 0.1.3 fixes 64x64), a traced exploration fraction,
-      learning start and target-update interval (static fields in rejax).
+      learning start and target-update interval (static fields in rejax); replay minibatches
+      drawn as rejax draws them or, with ``replay_sample = "with_replacement"``, uniformly
+      with replacement from the stored transitions as SB3 draws them (rejax's draw weighs
+      the whole buffer, so its cost grows with ``buffer_size``, not with the batch).
     """
     rejax = require("rejax", "rejax learners (sixaxis_avoid.benchmark.jax_learners)")
     optax = require("optax", "rejax learners")
@@ -104,6 +107,7 @@ def _rejax_classes() -> dict[str, Any]:
     from flax import struct
     from flax.training.train_state import TrainState
     from rejax.algos.algorithm import register_init
+    from rejax.buffers import ReplayBuffer
     from rejax.networks import DiscreteQNetwork, EpsilonGreedyPolicy
 
     def schedule(algo: Any, updates_per_iteration: int, first_iteration: Any = 0) -> Any:
@@ -140,7 +144,17 @@ def _rejax_classes() -> dict[str, Any]:
                 "critic_ts": TrainState.create(apply_fn=(), params=critic_params, tx=tx),
             }
 
+    class UniformReplayBuffer(ReplayBuffer):
+        """rejax's buffer drawing ``num`` stored transitions uniformly with replacement
+        (SB3's ``ReplayBuffer.sample``): O(num), where rejax's draw without replacement
+        builds weights over the whole buffer."""
+
+        def sample(self, num: int, rng: Any) -> Any:
+            idx = jax.random.randint(rng, (num,), 0, jnp.maximum(self.num_entries, 1))
+            return jax.tree_util.tree_map(lambda arr: arr[idx], self.data)
+
     class DQN(rejax.DQN):
+        replay_with_replacement: bool = struct.field(pytree_node=False, default=False)
         lr_decay: Any = struct.field(pytree_node=True, default=0.0)
         lr_iterations: int = struct.field(pytree_node=False, default=1)
         exploration_fraction: Any = struct.field(pytree_node=True, default=0.1)
@@ -166,6 +180,13 @@ def _rejax_classes() -> dict[str, Any]:
                 return self.eps_start + (self.eps_end - self.eps_start) * f
 
             return eps
+
+        @register_init
+        def initialize_replay_buffer(self, rng: Any) -> dict[str, Any]:
+            buffer = UniformReplayBuffer if self.replay_with_replacement else ReplayBuffer
+            return {
+                "replay_buffer": buffer.empty(self.buffer_size, self.obs_space, self.action_space)
+            }
 
         @register_init
         def initialize_network_params(self, rng: Any) -> dict[str, Any]:

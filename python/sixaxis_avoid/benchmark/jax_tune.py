@@ -15,6 +15,8 @@ trained at once, vmapped, on the suite's tuning tasks::
   (on a goal task too: counted over all its targets).
 - The objective is the reported metric: the mean final score (SPL over the evaluation
   targets, at the budget) over tasks and seeds.
+- ``--set NAME=JSON`` fixes a value for every trial (after the draw, so the other draws
+  stay the same), e.g. ``--set replay_sample='"with_replacement"'`` for DQN.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
   ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
@@ -198,6 +200,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--groups", type=int, default=2, help="draws of the static knobs")
     p.add_argument("--sampler-seed", type=int, default=0)
     p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=JSON",
+        help="a value fixed for every trial, over the drawn ones (jax_learners --set syntax)",
+    )
+    p.add_argument(
         "--hyperparams",
         type=Path,
         default=HYPERPARAMS_DIR / "v2.json",
@@ -226,7 +235,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         tasks = [known[t] for t in want]
     base = [int(s) for s in suite.tuning.get("seeds", [])]
     seeds = (base + [max(base, default=99) + 1 + i for i in range(a.seeds)])[: a.seeds]
-    candidates = draw(a.algo, a.trials, a.groups, a.sampler_seed)
+    fixed = jl.parse_sets(a.set)
+    candidates = [
+        jl.check_values(a.algo, {**c, **fixed})
+        for c in draw(a.algo, a.trials, a.groups, a.sampler_seed)
+    ]
     result = tune(
         a.algo, suite, a.budget, candidates, seeds, tasks,
         log=lambda m: print(m, file=sys.stderr),

@@ -63,7 +63,11 @@ DQN_DEFAULTS: dict[str, Any] = {
     "exploration_initial_eps": 1.0,
     "exploration_final_eps": 0.09495382193734919,
     "max_grad_norm": 10.0,
+    # rejax's draw (without replacement); "with_replacement" is SB3's draw, O(batch_size)
+    # where rejax's costs O(buffer_size) per minibatch (docs/PERFORMANCE.md, JAX learners).
+    "replay_sample": "without_replacement",
 }
+REPLAY_SAMPLES = ("without_replacement", "with_replacement")
 
 DEFAULTS = {"ppo": PPO_DEFAULTS, "dqn": DQN_DEFAULTS}
 
@@ -87,7 +91,7 @@ STATIC: dict[str, tuple[str, ...]] = {
     ),
     "dqn": (
         "reward_scale", "assist", "net_arch", "activation", "batch_size", "buffer_size",
-        "train_freq", "gradient_steps",
+        "train_freq", "gradient_steps", "replay_sample",
     ),
 }  # fmt: skip
 LR_SCHEDULES = {"constant": 0.0, "linear": 1.0}
@@ -142,6 +146,10 @@ def check_values(algo: str, values: dict[str, Any]) -> dict[str, Any]:
         for k in ("exploration_fraction", "exploration_initial_eps", "exploration_final_eps"):
             if not 0.0 <= float(out[k]) <= 1.0:
                 raise JaxLearnerError(f"{k}: {out[k]!r} must be in [0, 1]")
+        if out["replay_sample"] not in REPLAY_SAMPLES:
+            raise JaxLearnerError(
+                f"replay_sample: {out['replay_sample']!r} is not one of {REPLAY_SAMPLES}"
+            )
         if int(out["learning_starts"]) < 0:
             raise JaxLearnerError(f"learning_starts: {out['learning_starts']!r} is negative")
     return out
@@ -185,6 +193,7 @@ def rejax_config(algo: str, values: dict[str, Any]) -> dict[str, Any]:
             buffer_size=int(values["buffer_size"]),
             ddqn=False,  # SB3's DQN: the target net's max, not double DQN
             polyak=0.0,  # SB3's hard target update (rejax: polyak 0 copies the online net)
+            replay_with_replacement=values["replay_sample"] == "with_replacement",
         )
     return cfg
 
