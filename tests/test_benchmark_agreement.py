@@ -174,3 +174,54 @@ def test_dqn_ablation_section_reads_the_cause_from_the_committed_figures():
     assert f"in {sq['successes']}/{sq['runs']} runs" in text
     assert f"in {hu['successes']}/{hu['runs']}" in text
     assert sq["successes"] > hu["successes"]  # the reading the section gives
+
+
+def test_replay_draw_check_pairs_runs_and_refuses_other_differences(tmp_path):
+    """scripts/replay_draw_check.py summary: jax_dqn's runs with rejax's draw and with SB3's,
+    paired by task and seed; means, Wilson counts and the section's verdict come from the
+    files; run sets that differ in anything but the draw are refused."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "replay_draw_check",
+        Path(__file__).resolve().parents[1] / "scripts" / "replay_draw_check.py",
+    )
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    hp = {"learning_rate": 0.002, "gamma": 0.98}
+
+    def runs(d, extra, scores):
+        (d / "runs").mkdir(parents=True)
+        for (task, seed), s in scores.items():
+            r = {"spec": {"task": {"id": task}, "seed": seed, "hyperparams": {**hp, **extra}},
+                 "result": {"score": s, "success": s > 0}}  # fmt: skip
+            (d / "runs" / f"{task}__jax_dqn__s{seed}__b30000.json").write_text(json.dumps(r))
+
+    keys = [(t, s) for t in ("a", "b", "c") for s in range(4)]
+    base, var = tmp_path / "base", tmp_path / "var"
+    runs(base, {}, {k: 1.0 if k[0] != "c" else 0.0 for k in keys})
+    runs(
+        var, {"replay_sample": "with_replacement"}, {k: 1.0 if k != ("c", 0) else 0.0 for k in keys}
+    )
+    out = mod.summary(base, var)
+    wo, wi = out["draws"]["without_replacement"], out["draws"]["with_replacement"]
+    assert out["tasks"] == ["a", "b", "c"] and out["seeds"] == [0, 1, 2, 3]
+    assert wo["successes"] == 8 and wi["successes"] == 11 and wo["runs"] == 12
+    assert wo["mean_spl"] == pytest.approx(8 / 12) and wi["mean_spl"] == pytest.approx(11 / 12)
+    assert wo["per_task_mean_spl"]["c"] == 0.0 and wi["per_task_mean_spl"]["c"] == 0.75
+    text = mod.markdown(out)
+    assert "8/12" in text and "11/12" in text and "c (0.00 against 0.75)" in text
+    # One more difference than the draw: refused.
+    other = tmp_path / "other"
+    runs(other, {"replay_sample": "with_replacement", "gamma": 0.9}, dict.fromkeys(keys, 1.0))
+    with pytest.raises(SystemExit, match="more than the draw"):
+        mod.summary(base, other)
+    # The section is written between its markers, and rewritten in place.
+    page = tmp_path / "page.md"
+    page.write_text("# P\n\ntext\n")
+    mod.write_section(page, "one")
+    mod.write_section(page, "two")
+    body = page.read_text()
+    assert body.count("jax-dqn-replay-draw:begin") == 1 and "two" in body and "one" not in body
