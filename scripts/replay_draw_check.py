@@ -2,7 +2,7 @@
 rejax's draw (the committed runs, docs/results/v2) against the same values with SB3's draw
 (``replay_sample: with_replacement``), on every task and seed::
 
-    python scripts/replay_draw_check.py run \
+    python scripts/replay_draw_check.py run --seeds 5 \
         --out-dir docs/results/v2-variants/jax_dqn-with-replacement
     python scripts/replay_draw_check.py summary \
         --variant docs/results/v2-variants/jax_dqn-with-replacement \
@@ -33,12 +33,13 @@ BUDGET = 30000
 SECTION = "jax-dqn-replay-draw"
 
 
-def run_command(out_dir: Path) -> list[str]:
+def run_command(out_dir: Path, seeds: int | None = None) -> list[str]:
+    """The runner's command for the variant (``--seeds``: the first N seeds; default all)."""
     return [
         "python", "-m", "sixaxis_avoid.benchmark", "run", "--suite", "v2", "--learners",
         "jax_dqn", "--budgets", str(BUDGET), "--hyperparams", HP, "--set",
         "jax_dqn.replay_sample=with_replacement", "--no-ray", "--no-progress", "--out-dir",
-        str(out_dir),
+        str(out_dir), *(["--seeds", str(seeds)] if seeds else []),
     ]  # fmt: skip
 
 
@@ -49,6 +50,11 @@ def final_runs(run_dir: Path) -> dict[tuple[str, int], dict]:
         r = json.loads(f.read_text())
         out[(r["spec"]["task"]["id"], int(r["spec"]["seed"]))] = r
     return out
+
+
+def _shown(p: Path) -> str:
+    """A path as the docs give it: relative to the repository when inside it."""
+    return str(p.relative_to(ROOT) if p.is_relative_to(ROOT) else p)
 
 
 def summary(base: Path, variant: Path) -> dict:
@@ -73,9 +79,11 @@ def summary(base: Path, variant: Path) -> dict:
     out: dict = {
         "learner": "jax_dqn",
         "budget": BUDGET,
-        "base": str(base.relative_to(ROOT) if base.is_relative_to(ROOT) else base),
-        "variant": str(variant.relative_to(ROOT) if variant.is_relative_to(ROOT) else variant),
-        "variant_command": shlex.join(run_command(variant)),
+        "base": _shown(base),
+        "variant": _shown(variant),
+        "variant_command": shlex.join(
+            run_command(Path(_shown(variant)), len(seeds) if seeds != list(range(10)) else None)
+        ),
         "tasks": tasks,
         "seeds": seeds,
         "draws": {},
@@ -162,6 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run")
     r.add_argument("--out-dir", type=Path, required=True)
+    r.add_argument("--seeds", type=int, default=None, help="the first N seeds (default: all)")
     s = sub.add_parser("summary")
     s.add_argument("--base", type=Path, default=ROOT / "docs/results/v2")
     s.add_argument("--variant", type=Path, required=True)
@@ -169,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
     s.add_argument("--markdown", type=Path, default=None, help="page whose section to write")
     a = p.parse_args(argv)
     if a.cmd == "run":
-        return subprocess.call(run_command(a.out_dir), cwd=ROOT)
+        return subprocess.call(run_command(a.out_dir, a.seeds), cwd=ROOT)
     from sixaxis_avoid.benchmark._io import atomic_write_text
 
     out = summary(a.base.resolve(), a.variant.resolve())
