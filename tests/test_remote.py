@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -568,8 +569,12 @@ def test_a_plaintext_client_of_a_tls_server_fails_within_its_timeout(tls_server,
         assert "(the last attempt: " in message
     else:
         assert e.type is ConnectionError
-        # tonic's own words are kept before the hint.
-        assert "during CreateWorld (UNKNOWN: transport error" in message
+        # tonic's own words are kept before the hint. Which words depends on when the TLS
+        # bytes reach its HTTP/2 client: a transport error, or (seen on a loaded machine)
+        # an h2 protocol error.
+        assert re.search(
+            r"during CreateWorld \((UNKNOWN: transport error|INTERNAL: h2 protocol error)", message
+        ), message
     assert wait_for(lambda: tls_server.sessions == 0)
 
 
