@@ -134,11 +134,12 @@ def markdown(s: dict) -> str:
         row("without replacement (rejax)", wo),
         row("with replacement (SB3)", wi),
         "",
-        ("The intervals overlap: the draw does not change the result at this budget, so the "
-         "searches from 100k on use SB3's draw (their commands fix it with `--set`)."
+        ("The intervals overlap: the suite-wide result shows no difference that these runs can "
+         "resolve, so the searches from 100k on use SB3's draw (their commands fix it with "
+         "`--set`). Per task the two draws move either way, as different seeds' runs do."
          if s["overlap"] else
          "The intervals do not overlap: the draw changes the result at this budget."),
-        ("Tasks whose mean SPL differs by 0.2 or more: " + ", ".join(
+        ("Tasks whose mean SPL differs by 0.2 or more (rejax's against SB3's): " + ", ".join(
             f"{t} ({wo['per_task_mean_spl'][t]:.2f} against {wi['per_task_mean_spl'][t]:.2f})"
             for t in differ) + "." if differ else
          "No task's mean SPL differs by 0.2 or more."),
