@@ -21,13 +21,11 @@ import argparse
 import json
 import shlex
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
 HP = "python/sixaxis_avoid/benchmark/hyperparams/v2.json"
 BUDGET = 30000
 SECTION = "jax-dqn-replay-draw"
