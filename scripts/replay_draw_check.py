@@ -150,18 +150,10 @@ def markdown(s: dict) -> str:
 
 
 def write_section(page: Path, text: str) -> None:
-    from sixaxis_avoid.benchmark._io import atomic_write_text
+    """The page's section ``jax-dqn-replay-draw`` (agreement.write_section, atomic)."""
+    from sixaxis_avoid.benchmark.agreement import write_section as write
 
-    body = page.read_text()
-    begin, end = f"<!-- {SECTION}:begin -->", f"<!-- {SECTION}:end -->"
-    block = f"{begin}\n{text}\n{end}"
-    if begin in body:
-        head, _, rest = body.partition(begin)
-        _, _, tail = rest.partition(end)
-        body = head + block + tail
-    else:
-        body = body.rstrip("\n") + "\n\n" + block + "\n"
-    atomic_write_text(page, body)
+    write(page, text, SECTION)
 
 
 def main(argv: list[str] | None = None) -> int:
