@@ -328,15 +328,22 @@ def test_v2_headline_sits_where_every_ranked_learner_ran(tmp_path):
     a = write_report_v2(out, md, reps=100, suite=str(suite_path))
     assert a["common_budgets"] == [1000, 10000]
     assert a["missing_budgets"] == {"beta": [100000]}
-    # alpha is best at 10k; the plateau check has no budget after it among those both ran.
+    # alpha is best at 10k; its plateau is checked at 100k, which only alpha ran (flat there).
     assert a["best"] == ["alpha"] and a["headline"]["budget"] == 10000
-    assert not a["headline"]["plateaued"]
+    assert a["headline"]["plateaued"]
     text = md.read_text()
     assert "## Headline (10k env steps)" in text
-    assert "the largest budget at which every ranked learner ran, 10k" in text
+    assert "mean SPL at the next budget (100k) lies inside" in text
+    assert "Not every learner ran at 100k; the plateau is the best learners' own" in text
     assert "Not run yet: beta at 100k." in text
     head = text.split("<!-- benchmark-headline:begin -->")[1].split("<!-- benchmark-head")[0]
     assert "| alpha |" in head and "| beta |" in head
+    # Without alpha's 100k runs too, nothing after 10k can show the plateau.
+    for f in (out / "runs").glob("*__alpha__*__b100000.json"):
+        f.unlink()
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["headline"]["budget"] == 10000 and not a["headline"]["plateaued"]
+    assert "The plateau is not shown" in md.read_text()
 
 
 def test_v2_report_before_any_run_says_so(tmp_path):

@@ -201,7 +201,15 @@ def analyse_v2(
     scope = common or budgets
     last = scope[-1]
     best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
-    head = stats.headline_budget({b: means[b] for b in scope}, best) if best else None
+    # The plateau is the best learners' own: at the last budget every ranked learner ran, it
+    # is checked against the next budget of the axis at which every best learner ran (the
+    # others need not have). The headline never moves past that last common budget.
+    after = [b for b in budgets if b > last and all(lr in per_budget[b]["complete"] for lr in best)]
+    head = (
+        stats.headline_budget({b: means[b] for b in [*scope, *after[:1]]}, best) if best else None
+    )
+    if head and not head["plateaued"]:
+        head["budget"] = last
     a.update(
         {
             "learners": learners,
@@ -400,8 +408,10 @@ STATISTICS = [
     "- **Headline budget**: the best learners are those whose SPL interval at the largest "
     "budget overlaps the top learner's. The headline budget is the smallest budget of the "
     "axis at which each of them has plateaued: its mean SPL at the next budget lies inside "
-    "its interval at this one. Without such a budget the headline sits at the largest "
-    "budget and says the plateau is not shown.",
+    "its interval at this one. When not every learner ran every budget, the ranking stops "
+    "at the largest budget all of them ran, and the plateau there is checked against the "
+    "next budget at which every best learner ran. Without such a budget the headline sits "
+    "at the largest budget (all of them ran) and says the plateau is not shown.",
     "- **Performance profile**: the fraction of runs with SPL above τ, 95% band; "
     "**probability of improvement**: P(a run of the row learner scores higher than a run "
     "of the column learner on a task drawn at random), ties counting half (rliable).",
@@ -490,11 +500,19 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             "",
         ]
         if head and head["plateaued"]:
+            nxt = next(c["next"] for c in head["checks"] if c["budget"] == b)
+            only = (
+                f" Not every learner ran at {fmt_steps(nxt)}; the plateau is the best "
+                "learners' own, so only they need to have."
+                if nxt not in a["common_budgets"] and a["common_budgets"]
+                else ""
+            )
             L.append(
                 f"At {fmt_steps(b)} env steps the best learners ({', '.join(head['best'])}) "
-                "have plateaued: each one's mean SPL at the next budget lies inside its 95% "
-                "interval here (*Score by budget*). Ranked by mean SPL; overlapping intervals "
-                "are not a ranking."
+                f"have plateaued: each one's mean SPL at the next budget ({fmt_steps(nxt)}) "
+                "lies inside its 95% interval here (*Score by budget*)."
+                + only
+                + " Ranked by mean SPL; overlapping intervals are not a ranking."
             )
         else:
             where = (
