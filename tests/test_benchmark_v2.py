@@ -459,3 +459,44 @@ def test_compute_section_sums_the_runs_and_counts_each_trials_file_once():
     files = {e["trials"] for e in record["by_budget"].values()}
     all_tw = sum(json.loads((root / f).read_text())["wall_time_s"] for f in files) / 3600
     assert f"jax {all_tw + 0.1:.2f} h wall" in text and "deep 1.00 h wall, 0.50 h CPU" in text
+
+
+def test_twin_agreement_compares_each_jax_learner_with_its_sb3_twin():
+    """The study's JAX-against-SB3 check: both means on the seeds both ran, the difference
+    with its interval, overlap, and the tasks an exact permutation test sets apart."""
+    from sixaxis_avoid.benchmark.report_v2 import twin_agreement, twin_rows
+
+    def run(lr, task, seed, score, budget=100):
+        return {"spec": {"learner": lr, "task": {"id": task}, "seed": seed, "budget": budget},
+                "result": {"score": score}}  # fmt: skip
+
+    tasks = ["t1", "t2", "t3"]
+    runs = []
+    for s in range(5):
+        runs += [run("jax_ppo", t, s, 1.0) for t in tasks]
+        # ppo: equal on t1 and t2, all 0 on t3 (5 vs 5: exact p = 2/252).
+        runs += [run("ppo", "t1", s, 1.0), run("ppo", "t2", s, 1.0), run("ppo", "t3", s, 0.0)]
+        runs += [run("jax_dqn", t, s, 0.5) for t in tasks]  # dqn never ran: no dqn row
+    runs.append(run("jax_ppo", "t1", 7, 0.0))  # a seed ppo lacks is left out
+    a = {"budgets": [100], "tasks": tasks, "runs": runs,
+         "per_budget": {100: {"complete": ["jax_ppo", "ppo", "jax_dqn"]}}}  # fmt: skip
+    rows = twin_agreement(a, reps=500)
+    assert [(r["jax"], r["sb3"], r["budget"]) for r in rows] == [("jax_ppo", "ppo", 100)]
+    r = rows[0]
+    assert r["seeds"] == [0, 1, 2, 3, 4]
+    assert r["jax_mean"] == pytest.approx(1.0) and r["sb3_mean"] == pytest.approx(2 / 3)
+    assert r["diff"] == pytest.approx(1 / 3) and r["diff_ci"] == pytest.approx([1 / 3, 1 / 3])
+    assert not r["overlap"]
+    assert [(p["task"], round(p["p"], 4)) for p in r["parting"]] == [("t3", round(2 / 252, 4))]
+    text = "\n".join(twin_rows(rows))
+    assert "| jax_ppo | ppo | 100 | 5 | 1.000 (all equal) | 0.667 (all equal) |" in text
+    assert "| **no** | t3 (1.00 vs 0.00, p 0.008) |" in text
+    # Mixed outcomes: overlapping intervals, no task set apart.
+    for x in runs:
+        if x["spec"]["learner"] == "ppo" and x["spec"]["task"]["id"] == "t3":
+            x["result"]["score"] = float(x["spec"]["seed"] % 2)
+        if x["spec"]["learner"] == "jax_ppo" and x["spec"]["task"]["id"] == "t3":
+            x["result"]["score"] = float(x["spec"]["seed"] < 3)
+    r = twin_agreement(a, reps=500)[0]
+    assert r["overlap"] and r["parting"] == [] and r["diff_ci"][0] < 0 < r["diff_ci"][1]
+    assert twin_rows([]) == []
