@@ -201,8 +201,9 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     the ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did) and
     its wall time (and ``extra_wall_s``: earlier attempts into ``new`` that stopped before
     writing its manifest). A re-run replaces the learner's runs at those budgets (the same
-    set of run files, or none yet): the old files go, with their commands and their own wall
-    times."""
+    set of run files): the old files go, with their commands and their own wall times. Run
+    files none of which the study has (the learner's first runs at those budgets, or more
+    seeds there) are added, and the earlier commands stay."""
     new_runs = sorted((new / "runs").glob(f"*__{learner}__*.json"))
     budgets = {f.name.rsplit("__", 1)[1] for f in new_runs}
     old_runs = sorted(
@@ -210,7 +211,9 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
         for f in (v2 / "runs").glob(f"*__{learner}__*.json")
         if f.name.rsplit("__", 1)[1] in budgets
     )
-    if old_runs and {f.name for f in old_runs} != {f.name for f in new_runs}:
+    if not {f.name for f in old_runs} & {f.name for f in new_runs}:
+        old_runs = []  # more seeds (or tasks) at those budgets: added beside the others
+    elif {f.name for f in old_runs} != {f.name for f in new_runs}:
         raise SystemExit(f"{new}: its {learner} runs are not the same set as {v2}'s")
     old_wall = sum(json.loads(f.read_text())["timing"]["run_wall_time_s"] for f in old_runs)
     man, fresh = (json.loads((d / "study.json").read_text()) for d in (v2, new))
