@@ -582,11 +582,11 @@ def test_ppo_rejax_settings_reach_the_sb3_model():
     assert type(plain.model.policy.optimizer) is torch.optim.Adam
 
 
-def test_a_replan_round_whose_obstacles_block_the_target_has_no_path():
+def test_a_replan_round_whose_obstacles_block_the_target_or_start_has_no_path():
     """Algorithm 2 with a deep learner: when a re-plan round's new obstacles leave its target
-    blocked (the core's scenario check names the field ``target``), that round has no path
-    and nothing is trained (Algorithm 2 fails there) instead of the error ending the whole
-    study. Any other invalid field still raises."""
+    or its start blocked (the core's scenario check names the field ``target`` or
+    ``start``), that round has no path and nothing is trained (Algorithm 2 fails there)
+    instead of the error ending the whole study. Any other invalid field still raises."""
     from sixaxis_avoid.benchmark.learners import Learner, RetrainPerRound, RunContext
 
     class Untrained(Learner):
@@ -607,8 +607,8 @@ def test_a_replan_round_whose_obstacles_block_the_target_has_no_path():
         them (here the real check of this dict: an obstacle next to the target, within the
         96 mm terminal_safe_distance on the 50 mm grid)."""
 
-        def __init__(self, obstacle):
-            self.d = {**d, "obstacles": [*d["obstacles"], obstacle]}
+        def __init__(self, obstacle, **fields):
+            self.d = {**d, "obstacles": [*d["obstacles"], obstacle], **fields}
             self.start, self.target = d["start"], d["target"]
             self.obstacles = self.d["obstacles"]
 
@@ -616,12 +616,22 @@ def test_a_replan_round_whose_obstacles_block_the_target_has_no_path():
             sa.Scenario.from_dict(self.d)
 
     ctx = RunContext(SimpleNamespace(scenario=base), 0, 1000, {}, [], Untrained())
-    assert RetrainPerRound(ctx.learner, ctx).learn_path(Round([t[0] + 1, *t[1:]]), 0) == {
-        "path": None,
-        "total_steps": 0,
-    }
-    with pytest.raises(sa.ScenarioError, match="start"):  # the start blocked: not this case
-        RetrainPerRound(ctx.learner, ctx).learn_path(Round([d["start"][0] + 1, *d["start"][1:]]), 0)
+    s0 = d["start"]
+    # A path cell next to the target, then next to the start (jax_dqn at 300k met the
+    # second on gen-medium-0-50mm): no env, no path.
+    for cell in ([t[0] + 1, *t[1:]], [s0[0] + 1, *s0[1:]]):
+        got = RetrainPerRound(ctx.learner, ctx).learn_path(Round(cell), 0)
+        assert got == {"path": None, "total_steps": 0}
+    with pytest.raises(sa.ScenarioError, match="terminal_safe_distance"):
+        RetrainPerRound(ctx.learner, ctx).learn_path(
+            Round([t[0] + 1, *t[1:]], terminal_safe_distance=-1.0), 0
+        )
+    # The JAX learners' rounds (jax_runs) refuse the same worlds before compiling anything.
+    from sixaxis_avoid.benchmark.jax_runs import _Replan
+
+    replan = _Replan("dqn", SimpleNamespace(scenario=base), {}, 1000, path=[])
+    for cell in ([t[0] + 1, *t[1:]], [s0[0] + 1, *s0[1:]]):
+        assert replan.learn_path(Round(cell), 0) == {"path": None, "total_steps": 0}
 
 
 def test_dqn_implementation_rejax_runs_train_freq_envs_and_v2_uses_it_with_jax_dqns_values():

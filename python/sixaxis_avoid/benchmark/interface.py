@@ -265,16 +265,7 @@ class RetrainPerRound:
             path = self.ctx.points[-1]["paths"][0]
             steps = self.ctx.env_steps
         else:
-            import sixaxis_avoid as sa
-
-            try:
-                scenario.validate()
-            except sa.ScenarioError as e:
-                if e.field != "target":
-                    raise
-                # The round's new obstacles block the target (a path cell next to it on a
-                # fine grid, within terminal_safe_distance): no env can be built, so there is
-                # no path in this world, and Algorithm 2 fails.
+            if round_world_blocked(scenario):
                 return {"path": None, "total_steps": 0}
             fresh = type(self.learner)(self.learner.hyperparams)
             ctx = RunContext(
@@ -284,6 +275,22 @@ class RetrainPerRound:
             path, steps = fresh.greedy_path(scenario), ctx.env_steps
         cells = None if path is None else [tuple(int(v) for v in c) for c in path]
         return {"path": cells, "total_steps": int(steps)}
+
+
+def round_world_blocked(scenario: Any) -> bool:
+    """Whether a re-plan round's world holds no env: the points Algorithm 2 added as
+    obstacles block the start or the target (a path cell next to it on a fine grid, within
+    ``terminal_safe_distance``). Then no learner can learn a path there, it returns none,
+    and Algorithm 2 fails with the core's reason. Any other invalid field raises."""
+    import sixaxis_avoid as sa
+
+    try:
+        scenario.validate()
+    except sa.ScenarioError as e:
+        if e.field not in ("start", "target"):
+            raise
+        return True
+    return False
 
 
 def same_world(a: Any, b: Any) -> bool:

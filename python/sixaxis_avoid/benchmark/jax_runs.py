@@ -17,7 +17,7 @@ import time
 from typing import Any, ClassVar
 
 from sixaxis_avoid.benchmark.jax_values import DQN_DEFAULTS, PPO_DEFAULTS
-from sixaxis_avoid.benchmark.learners import Learner, RunContext, same_world
+from sixaxis_avoid.benchmark.learners import Learner, RunContext, round_world_blocked, same_world
 
 SEED_FREE = ("seed",)
 
@@ -93,6 +93,8 @@ class _Replan:
 
         if same_world(scenario, self.task.scenario):
             return {"path": self.path, "total_steps": int(self.steps)}
+        if round_world_blocked(scenario):
+            return {"path": None, "total_steps": 0}
         world = _WorldTask(
             Task(id=self.task.id, kind=self.task.kind, spec=self.task.spec), scenario
         )
