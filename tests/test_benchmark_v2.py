@@ -464,7 +464,7 @@ def test_compute_section_sums_the_runs_and_counts_each_trials_file_once():
 def test_twin_agreement_compares_each_jax_learner_with_its_sb3_twin():
     """The study's JAX-against-SB3 check: both means on the seeds both ran, the difference
     with its interval, overlap, and the tasks an exact permutation test sets apart."""
-    from sixaxis_avoid.benchmark.report_v2 import twin_agreement, twin_rows
+    from sixaxis_avoid.benchmark.twins import twin_agreement, twin_rows
 
     def run(lr, task, seed, score, budget=100):
         return {"spec": {"learner": lr, "task": {"id": task}, "seed": seed, "budget": budget},

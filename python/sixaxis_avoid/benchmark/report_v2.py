@@ -27,8 +27,9 @@ from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.report_compute import compute_rows
 from sixaxis_avoid.benchmark.runner import load_runs
-from sixaxis_avoid.benchmark.stats import fmt_steps
+from sixaxis_avoid.benchmark.stats import fmt_ci, fmt_steps
 from sixaxis_avoid.benchmark.tasks import Suite, load_suite
+from sixaxis_avoid.benchmark.twins import twin_agreement, twin_rows
 
 #: Learners reported as the paper's reproduction, outside the ranking (docs/BENCHMARKS.md).
 REPRODUCTION = ("q_paper",)
@@ -49,105 +50,6 @@ IMPLEMENTATION_NOTES = {
     "update phases and plain replay (no HER) on the goal task, the implementation jax_dqn's "
     "values were tuned on; with SB3's Huber loss they fail: *JAX against SB3*",
 }
-
-
-#: Each JAX learner and the SB3 learner that runs the same algorithm with its values (the
-#: study's own check that the two implementations agree, *JAX and SB3 in the study*).
-TWINS = {"jax_ppo": "ppo", "jax_dqn": "dqn"}
-
-#: A task is listed as parting when the permutation p of its final scores is below this.
-PARTING_P = 0.05
-
-
-def twin_agreement(a: dict[str, Any], reps: int = 2000) -> list[dict[str, Any]]:
-    """For each pair of :data:`TWINS` and each budget at which both ran every task: both
-    learners' mean final SPL on the seeds both ran (95% stratified-bootstrap intervals), the
-    difference of the means with an interval from resampling each learner's seeds within
-    each task on its own, whether the two intervals overlap, and the tasks whose exact
-    two-sided permutation test of the final scores gives p < :data:`PARTING_P`."""
-    from sixaxis_avoid.benchmark.agreement import permutation_p
-
-    out: list[dict[str, Any]] = []
-    for jx, sb in TWINS.items():
-        for b in a["budgets"]:
-            if not {jx, sb} <= set(a["per_budget"][b]["complete"]):
-                continue
-            at = [r for r in a["runs"] if stats.budget_of_run(r) == b]
-            scores, seeds = stats.score_matrices(at, [jx, sb], a["tasks"])
-            if len(seeds) < 2:
-                continue
-            x, y = scores[jx], scores[sb]
-            rng = np.random.default_rng(0)
-            n = len(seeds)
-            ix = rng.integers(0, n, size=(reps, n, x.shape[1]))
-            iy = rng.integers(0, n, size=(reps, n, x.shape[1]))
-            cols = np.arange(x.shape[1])
-            diffs = x[ix, cols].mean(axis=(1, 2)) - y[iy, cols].mean(axis=(1, 2))
-            mx, cx = stats.mean_ci(x, reps=reps)
-            my, cy = stats.mean_ci(y, reps=reps)
-            parting = []
-            for j, t in enumerate(a["tasks"]):
-                p = permutation_p(x[:, j], y[:, j], rng)
-                if p < PARTING_P:
-                    parting.append({"task": t, "jax": float(x[:, j].mean()),
-                                    "sb3": float(y[:, j].mean()), "p": float(p)})  # fmt: skip
-            out.append(
-                {
-                    "jax": jx,
-                    "sb3": sb,
-                    "budget": b,
-                    "seeds": seeds,
-                    "jax_mean": mx,
-                    "jax_ci": cx,
-                    "sb3_mean": my,
-                    "sb3_ci": cy,
-                    "diff": mx - my,
-                    "diff_ci": [float(np.quantile(diffs, 0.025)), float(np.quantile(diffs, 0.975))],
-                    "overlap": bool(cx[0] <= cy[1] + 1e-12 and cy[0] <= cx[1] + 1e-12),
-                    "parting": parting,
-                }
-            )
-    return out
-
-
-def twin_rows(rows: list[dict[str, Any]]) -> list[str]:
-    """The *JAX and SB3 in the study* section (:func:`twin_agreement`)."""
-    if not rows:
-        return []
-    L = [
-        "## JAX and SB3 in the study",
-        "",
-        "Each JAX learner against the SB3 learner that runs the same algorithm with its "
-        "values, on every task at every budget both ran, on the seeds both ran: mean final "
-        "SPL with 95% stratified-bootstrap intervals, the difference (JAX minus SB3) with an "
-        "interval from resampling each learner's seeds within each task on its own, and the "
-        f"tasks where an exact permutation test of the final scores gives p < {PARTING_P} "
-        "(with 21 tasks, about one such task is expected by chance at that level). "
-        "*Agree*: the two intervals overlap.",
-        "",
-        "| JAX | SB3 | budget | seeds | JAX mean | SB3 mean | difference | agree | tasks with "
-        f"p < {PARTING_P} |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in rows:
-        parting = "; ".join(
-            f"{p['task']} ({p['jax']:.2f} vs {p['sb3']:.2f}, p {p['p']:.3f})" for p in r["parting"]
-        )
-        L.append(
-            f"| {r['jax']} | {r['sb3']} | {fmt_steps(r['budget'])} | {len(r['seeds'])} | "
-            f"{fmt_ci(r['jax_mean'], r['jax_ci'])} | {fmt_ci(r['sb3_mean'], r['sb3_ci'])} | "
-            f"{r['diff']:+.3f} [{r['diff_ci'][0]:+.3f}, {r['diff_ci'][1]:+.3f}] | "
-            f"{'yes' if r['overlap'] else '**no**'} | {parting or 'none'} |"
-        )
-    return [*L, ""]
-
-
-def fmt_ci(point: float, ci: list[float], digits: int = 3) -> str:
-    """``0.800 [0.733, 0.867]``; a zero-width interval (every resample the same: all runs
-    scored alike) reads ``1.000 (all equal)``, not as certainty."""
-    if ci[1] - ci[0] < 10.0 ** (-digits - 2):
-        return f"{point:.{digits}f} (all equal)"
-    return f"{point:.{digits}f} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
 
 
 def fmt_wilson(w: dict[str, Any]) -> str:

@@ -39,6 +39,14 @@ def fmt_steps(v: Any) -> str:
     return f"{v:.0f}"
 
 
+def fmt_ci(point: float, ci: list[float], digits: int = 3) -> str:
+    """``0.800 [0.733, 0.867]``; a zero-width interval (every resample the same: all runs
+    scored alike) reads ``1.000 (all equal)``, not as certainty."""
+    if ci[1] - ci[0] < 10.0 ** (-digits - 2):
+        return f"{point:.{digits}f} (all equal)"
+    return f"{point:.{digits}f} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+
+
 def interval_text(point: float, lo_hi: list[float], seeds: int = 2, digits: int = 2) -> str:
     """``0.60 [0.42, 0.89]``, or ``0.60 (1 seed: no CI)`` with one run per task."""
     if seeds < 2:
