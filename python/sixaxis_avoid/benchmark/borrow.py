@@ -29,9 +29,10 @@ from typing import Any
 
 from sixaxis_avoid.benchmark._io import atomic_write_text
 from sixaxis_avoid.benchmark.hyperparams import HYPERPARAMS_DIR, display_path
+from sixaxis_avoid.benchmark.jax_values import JAX_LEARNER
 
 #: The JAX twin of each SB3 learner.
-TWIN = {"ppo": "jax_ppo", "dqn": "jax_dqn"}
+TWIN = JAX_LEARNER
 #: SB3's MlpPolicy activation per algorithm (the SB3 learners take no activation setting).
 SB3_ACTIVATION = {"ppo": "tanh", "dqn": "relu"}
 #: What ``implementation: rejax`` changes in SB3 (learners.PPO_IMPLEMENTATIONS /

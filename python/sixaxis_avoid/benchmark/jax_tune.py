@@ -40,8 +40,9 @@ import numpy as np
 from sixaxis_avoid.benchmark import jax_learners as jl
 from sixaxis_avoid.benchmark._io import atomic_write_text
 from sixaxis_avoid.benchmark.hyperparams import HYPERPARAMS_DIR
+from sixaxis_avoid.benchmark.jax_values import JAX_LEARNER
 
-LEARNER = {"ppo": "jax_ppo", "dqn": "jax_dqn"}
+LEARNER = JAX_LEARNER
 
 
 def space(algo: str, rng: np.random.Generator) -> tuple[dict[str, Any], dict[str, Any]]:

@@ -17,6 +17,11 @@ from typing import Any
 
 ALGOS = ("ppo", "dqn")
 
+#: The benchmark learner of each algorithm on the JAX twin; the SB3 learner of the same
+#: algorithm is named by the algorithm (``ppo``, ``dqn``). Declared once here: the tuner,
+#: the borrowed SB3 entries and the report's JAX-against-SB3 section all read it.
+JAX_LEARNER = {"ppo": "jax_ppo", "dqn": "jax_dqn"}
+
 #: Env settings every JAX learner shares with the SB3 learners (``learners.ENV_DEFAULTS``).
 ENV_DEFAULTS: dict[str, Any] = {"reward_scale": 1e-4, "assist": True}
 

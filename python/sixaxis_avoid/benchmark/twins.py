@@ -14,11 +14,12 @@ import numpy as np
 
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark.agreement import permutation_p
+from sixaxis_avoid.benchmark.jax_values import JAX_LEARNER
 from sixaxis_avoid.benchmark.stats import fmt_ci, fmt_steps
 
 #: Each JAX learner and the SB3 learner that runs the same algorithm with its values (the
 #: study's own check that the two implementations agree, *JAX and SB3 in the study*).
-TWINS = {"jax_ppo": "ppo", "jax_dqn": "dqn"}
+TWINS = {jax: sb3 for sb3, jax in JAX_LEARNER.items()}
 
 #: A task is listed as parting when the permutation p of its final scores is below this.
 PARTING_P = 0.05
