@@ -619,9 +619,11 @@ def test_a_replan_round_whose_obstacles_block_the_target_or_start_has_no_path():
     s0 = d["start"]
     # A path cell next to the target, then next to the start (jax_dqn at 300k met the
     # second on gen-medium-0-50mm): no env, no path.
-    for cell in ([t[0] + 1, *t[1:]], [s0[0] + 1, *s0[1:]]):
+    for cell, field in (([t[0] + 1, *t[1:]], "target"), ([s0[0] + 1, *s0[1:]], "start")):
         got = RetrainPerRound(ctx.learner, ctx).learn_path(Round(cell), 0)
-        assert got == {"path": None, "total_steps": 0}
+        assert got["path"] is None and got["total_steps"] == 0
+        assert got["reason"].startswith("the points added so far leave no env to learn in")
+        assert f"`{field}`" in got["reason"] and "terminal_safe_distance" in got["reason"]
     with pytest.raises(sa.ScenarioError, match="terminal_safe_distance"):
         RetrainPerRound(ctx.learner, ctx).learn_path(
             Round([t[0] + 1, *t[1:]], terminal_safe_distance=-1.0), 0
@@ -630,8 +632,9 @@ def test_a_replan_round_whose_obstacles_block_the_target_or_start_has_no_path():
     from sixaxis_avoid.benchmark.jax_runs import _Replan
 
     replan = _Replan("dqn", SimpleNamespace(scenario=base), {}, 1000, path=[])
-    for cell in ([t[0] + 1, *t[1:]], [s0[0] + 1, *s0[1:]]):
-        assert replan.learn_path(Round(cell), 0) == {"path": None, "total_steps": 0}
+    for cell, field in (([t[0] + 1, *t[1:]], "target"), ([s0[0] + 1, *s0[1:]], "start")):
+        got = replan.learn_path(Round(cell), 0)
+        assert got["path"] is None and got["total_steps"] == 0 and f"`{field}`" in got["reason"]
 
 
 def test_dqn_implementation_rejax_runs_train_freq_envs_and_v2_uses_it_with_jax_dqns_values():

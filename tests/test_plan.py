@@ -298,6 +298,14 @@ def test_plan_python_learner_errors():
         assert info.value.name == "path"
     none = sa.plan(s, learner=lambda world, seed: None)
     assert not none.success and "returned no path (round 0)" in none.failure
+    # A learner may say why it found no path; the core appends the round.
+    said = sa.plan(s, learner=lambda world, seed: {"path": None, "reason": "no env here"})
+    assert not said.success and said.failure == "no env here (round 0)"
+    unsaid = sa.plan(s, learner=lambda world, seed: {"path": None, "reason": None})
+    assert "returned no path (round 0)" in unsaid.failure
+    with pytest.raises(sa.InvalidArgumentError, match="must be a string or None") as info:
+        sa.plan(s, learner=lambda world, seed: {"path": None, "reason": 7})
+    assert info.value.name == "learner result `reason`"
     with pytest.raises(sa.InvalidArgumentError, match="learner"):
         sa.plan(s, learner="dqn")
     with pytest.raises(sa.InvalidArgumentError, match="learner"):

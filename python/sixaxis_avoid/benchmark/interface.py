@@ -265,8 +265,9 @@ class RetrainPerRound:
             path = self.ctx.points[-1]["paths"][0]
             steps = self.ctx.env_steps
         else:
-            if round_world_blocked(scenario):
-                return {"path": None, "total_steps": 0}
+            blocked = round_world_blocked(scenario)
+            if blocked:
+                return {"path": None, "total_steps": 0, "reason": blocked}
             fresh = type(self.learner)(self.learner.hyperparams)
             ctx = RunContext(
                 self.ctx.task, seed, self.ctx.budget, fresh.hyperparams, [], fresh, scenario
@@ -277,11 +278,12 @@ class RetrainPerRound:
         return {"path": cells, "total_steps": int(steps)}
 
 
-def round_world_blocked(scenario: Any) -> bool:
-    """Whether a re-plan round's world holds no env: the points Algorithm 2 added as
-    obstacles block the start or the target (a path cell next to it on a fine grid, within
-    ``terminal_safe_distance``). Then no learner can learn a path there, it returns none,
-    and Algorithm 2 fails with the core's reason. Any other invalid field raises."""
+def round_world_blocked(scenario: Any) -> str | None:
+    """Why a re-plan round's world holds no env, or None if it holds one: the points
+    Algorithm 2 added as obstacles block the start or the target (a path cell next to it on
+    a fine grid, within ``terminal_safe_distance``). Then no learner can learn a path there;
+    it returns none with this reason (the ``reason`` of its result), and Algorithm 2 fails
+    with it. Any other invalid field raises."""
     import sixaxis_avoid as sa
 
     try:
@@ -289,8 +291,8 @@ def round_world_blocked(scenario: Any) -> bool:
     except sa.ScenarioError as e:
         if e.field not in ("start", "target"):
             raise
-        return True
-    return False
+        return f"the points added so far leave no env to learn in: {e}"
+    return None
 
 
 def same_world(a: Any, b: Any) -> bool:

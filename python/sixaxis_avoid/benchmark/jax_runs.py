@@ -93,8 +93,9 @@ class _Replan:
 
         if same_world(scenario, self.task.scenario):
             return {"path": self.path, "total_steps": int(self.steps)}
-        if round_world_blocked(scenario):
-            return {"path": None, "total_steps": 0}
+        blocked = round_world_blocked(scenario)
+        if blocked:
+            return {"path": None, "total_steps": 0, "reason": blocked}
         world = _WorldTask(
             Task(id=self.task.id, kind=self.task.kind, spec=self.task.spec), scenario
         )

@@ -81,6 +81,11 @@ pub struct LearnedPath {
     pub total_steps: u64,
     /// Wall time of the learning, seconds.
     pub wall_time_s: f64,
+    /// Why `path` is `None`, in the learner's own words (for example: the round's added
+    /// points block the start); the run's failure reason is this text with ` (round k)`
+    /// appended. `None` takes [`PathLearner::no_path_reason`]; ignored when a path was found.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub no_path_reason: Option<String>,
 }
 
 /// One round of Algorithm 2, as a [`PathLearner`] sees it.
@@ -104,7 +109,8 @@ pub trait PathLearner {
     /// Learn a path from the world's start to its target.
     fn learn_path(&mut self, world: &GridWorld, round: &Round<'_>) -> Result<LearnedPath>;
 
-    /// Why the run stops when [`PathLearner::learn_path`] found no path in round `round`.
+    /// Why the run stops when [`PathLearner::learn_path`] found no path in round `round`
+    /// and gave no reason of its own ([`LearnedPath::no_path_reason`]).
     fn no_path_reason(&self, round: u32) -> String {
         format!("the path learner found no path to the target (round {round})")
     }
@@ -127,6 +133,7 @@ impl PathLearner for QLearner {
             length_converged_episode: r.length_converged_episode,
             total_steps: r.total_steps,
             wall_time_s: r.wall_time_s,
+            no_path_reason: None,
         })
     }
 
@@ -410,7 +417,10 @@ pub fn plan(
         };
         let Some(path) = learned.path else {
             result.rounds.push(summary);
-            let why = learner.no_path_reason(round);
+            let why = match learned.no_path_reason {
+                Some(own) => format!("{own} (round {round})"),
+                None => learner.no_path_reason(round),
+            };
             return Ok(finish(result, Some(why)));
         };
         let planner = PosePlanner::for_round(scenario, round);

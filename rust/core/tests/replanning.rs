@@ -335,3 +335,60 @@ fn invalid_learned_paths_are_rejected_with_the_rule_they_break() {
     let ok = plan(&s, &o, Some(&mut Fixed(good.clone())), None).unwrap();
     assert!(ok.success && ok.path == good);
 }
+
+/// A learner that finds no path, with or without a reason of its own.
+struct Refuses(Option<&'static str>);
+
+impl sixaxis_core::replanning::PathLearner for Refuses {
+    fn learn_path(
+        &mut self,
+        _world: &GridWorld,
+        _round: &sixaxis_core::replanning::Round<'_>,
+    ) -> sixaxis_core::Result<sixaxis_core::replanning::LearnedPath> {
+        Ok(sixaxis_core::replanning::LearnedPath {
+            no_path_reason: self.0.map(str::to_string),
+            ..Default::default()
+        })
+    }
+}
+
+#[test]
+fn a_learners_own_reason_for_no_path_is_the_failure_with_its_round() {
+    let s = Scenario::load("paper_simple").unwrap();
+    let o = PlanOptions::from_scenario(&s);
+    let own = plan(
+        &s,
+        &o,
+        Some(&mut Refuses(Some("the start is blocked"))),
+        None,
+    )
+    .unwrap();
+    assert!(!own.success);
+    assert_eq!(
+        own.failure.as_deref(),
+        Some("the start is blocked (round 0)")
+    );
+    let default = plan(&s, &o, Some(&mut Refuses(None)), None).unwrap();
+    assert_eq!(
+        default.failure.as_deref(),
+        Some("the path learner found no path to the target (round 0)")
+    );
+    // A reason beside a path is not read: the path is planned.
+    struct PathAndReason(Vec<sixaxis_core::Cell>);
+    impl sixaxis_core::replanning::PathLearner for PathAndReason {
+        fn learn_path(
+            &mut self,
+            _world: &GridWorld,
+            _round: &sixaxis_core::replanning::Round<'_>,
+        ) -> sixaxis_core::Result<sixaxis_core::replanning::LearnedPath> {
+            Ok(sixaxis_core::replanning::LearnedPath {
+                path: Some(self.0.clone()),
+                no_path_reason: Some("unused".into()),
+                ..Default::default()
+            })
+        }
+    }
+    let good = GridWorld::new(&s).unwrap().shortest_path().unwrap();
+    let ok = plan(&s, &o, Some(&mut PathAndReason(good)), None).unwrap();
+    assert!(ok.success && ok.failure.is_none());
+}

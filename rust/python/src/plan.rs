@@ -228,7 +228,8 @@ impl PathLearner for PyLearner<'_> {
 }
 
 /// A Python learner's return value: a list of cells, `None`, or a dict with `path` and
-/// optional `total_steps`, `converged_episode`, `length_converged_episode`, `wall_time_s`.
+/// optional `total_steps`, `converged_episode`, `length_converged_episode`, `wall_time_s`,
+/// `reason` (why `path` is `None`: the plan's failure reason, the round appended).
 fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<LearnedPath> {
     let mut out = LearnedPath::default();
     let path_obj = if let Ok(d) = ret.cast::<PyDict>() {
@@ -250,6 +251,15 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
                         int_in(py, &field, &Domain::u32_from(0), Some(&v))?.map(|v| v as u32)
                 }
                 "wall_time_s" => out.wall_time_s = v.extract()?,
+                "reason" => {
+                    out.no_path_reason = if v.is_none() {
+                        None
+                    } else {
+                        Some(v.extract().map_err(|_| {
+                            invalid_argument(py, &field, repr(&v), "must be a string or None")
+                        })?)
+                    }
+                }
                 _ => {}
             }
         }
@@ -299,7 +309,8 @@ fn learned_of(py: Python<'_>, ret: &Bound<'_, PyAny>, t0: Instant) -> PyResult<L
 /// seed)`` method: called once per round with the round's world (the scenario with every
 /// point added so far appended to its obstacles), it returns the path as a list of
 /// ``(x, y, z)`` cells from start to target, ``None`` when it found none, or a dict
-/// ``{"path": ..., "total_steps": int, ...}``. The core checks every path (start, target,
+/// ``{"path": ..., "total_steps": int, "reason": str, ...}`` (``reason``: why ``path`` is
+/// ``None``, the plan's ``failure`` with `` (round k)`` appended). The core checks every path (start, target,
 /// neighbouring steps, no obstacle); an exception the learner raises propagates unchanged.
 /// Same arithmetic and random stream as ``sixaxis plan``. A plan that cannot be completed
 /// is returned with ``success=False`` and a ``failure`` reason; bad arguments raise
