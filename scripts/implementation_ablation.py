@@ -200,7 +200,7 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     committed study ``v2``: its run files come in, and the manifest gains its command with
     the ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did) and
     its wall time (and ``extra_wall_s``: earlier attempts into ``new`` that stopped before
-    writing its manifest). A re-run replaces the learner's runs at those budgets (the same
+    writing its manifest); a path inside the checkout becomes relative to it. A re-run replaces the learner's runs at those budgets (the same
     set of run files): the old files go, with their commands and their own wall times. Run
     files none of which the study has (the learner's first runs at those budgets, or more
     seeds there) are added, and the earlier commands stay."""
@@ -218,6 +218,7 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     old_wall = sum(json.loads(f.read_text())["timing"]["run_wall_time_s"] for f in old_runs)
     man, fresh = (json.loads((d / "study.json").read_text()) for d in (v2, new))
     command = fresh["command"].replace(f"--out-dir {new}", f"--out-dir {v2}")
+    command = command.replace(f"{ROOT}/", "")  # paths in the checkout, as the page's commands
     budget_flag = re.search(r"--budgets (\S+)", command)
     keep = [
         c

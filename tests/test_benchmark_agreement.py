@@ -156,13 +156,15 @@ def test_merge_v2_adds_a_new_learners_runs_and_replaces_a_re_run(tmp_path):
         mod.merge_v2("jax_dqn", new2, v2)
     # More seeds of dqn at 30k (no file in common): added, every earlier command kept.
     new3 = tmp_path / "new3"
-    study(new3, ["dqn"], [c.format("dqn", 30000, new3) + " --seeds 5,"],
+    # A path inside the checkout (an absolute --hyperparams) is written relative to it.
+    hp = " --hyperparams {}python/sixaxis_avoid/benchmark/hyperparams/v2.json"
+    study(new3, ["dqn"], [c.format("dqn", 30000, new3) + hp.format(f"{mod.ROOT}/")],
           [("t__dqn__s5__b30000.json", 1.5)], 2.0)  # fmt: skip
     before = man["commands"]
     mod.merge_v2("dqn", new3, v2)
     man = json.loads((v2 / "study.json").read_text())
     assert man["runs"] == 4 and man["wall_time_s_total"] == 16.0 - 5.0 + 2.5 + 2.0
-    assert man["commands"] == [*before, c.format("dqn", 30000, v2) + " --seeds 5,"]
+    assert man["commands"] == [*before, c.format("dqn", 30000, v2) + hp.format("")]
     assert (v2 / "runs" / "t__dqn__s0__b30000.json").exists()
 
 
