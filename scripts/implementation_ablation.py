@@ -200,10 +200,11 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     committed study ``v2``: its run files come in, and the manifest gains its command with
     the ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did) and
     its wall time (and ``extra_wall_s``: earlier attempts into ``new`` that stopped before
-    writing its manifest); a path inside the checkout becomes relative to it. A re-run replaces the learner's runs at those budgets (the same
-    set of run files): the old files go, with their commands and their own wall times. Run
-    files none of which the study has (the learner's first runs at those budgets, or more
-    seeds there) are added, and the earlier commands stay."""
+    writing its manifest); a path inside the checkout becomes relative to it. A re-run
+    replaces the learner's runs at those budgets (the same set of run files): the old files
+    go, with their commands and their own wall times. Run files none of which the study has
+    (the learner's first runs at those budgets, or more seeds there) are added, and the
+    earlier commands stay."""
     new_runs = sorted((new / "runs").glob(f"*__{learner}__*.json"))
     budgets = {f.name.rsplit("__", 1)[1] for f in new_runs}
     old_runs = sorted(
