@@ -274,6 +274,13 @@ def test_aggregates_on_known_scores():
     assert g["profile"][0] == 1.0 and a["learners"]["bad"]["profile"][-1] == 0.0
     # Seeded: the same intervals again.
     assert stats.aggregates({"good": good, "bad": bad}, reps=200) == a
+    # Each learner and pair draws from its own stream: a third learner's runs move nobody
+    # else's interval, profile band or probability of improvement.
+    mid = np.clip(rng.normal(0.5, 0.2, size=(10, 4)), 0, 1)
+    b = stats.aggregates({"mid": mid, "good": good, "bad": bad}, reps=200)
+    assert b["learners"]["good"] == g and b["learners"]["bad"] == a["learners"]["bad"]
+    assert b["poi"]["good,bad"] == a["poi"]["good,bad"]
+    assert stats.aggregates({"good": good}, reps=200)["learners"]["good"] == g
     assert g["seeds"] == 10 and "[" in fmt_ci(g, "iqm")
 
 

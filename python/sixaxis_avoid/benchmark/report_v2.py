@@ -388,7 +388,9 @@ STATISTICS = [
     "95% score interval (it stays inside [0, 1] and does not shrink to a point when every "
     "run succeeds or fails).",
     "- **SPL**: the mean over tasks and seeds, with a 95% stratified-bootstrap interval "
-    "(rliable; tasks are the strata, seeds are resampled within each task). *all equal*: "
+    f"(rliable, {stats.REPS:,} resamples; tasks are the strata, seeds are resampled within "
+    "each task; each learner, and each pair of learners, resamples from a seeded stream of "
+    "its own, so adding one learner's runs moves no other interval). *all equal*: "
     "every run scored the same, so the bootstrap has nothing to resample and gives no "
     "interval; read the success rate's Wilson interval instead.",
     f"- **IQM** is shown only where fewer than {stats.IQM_DEGENERATE_FRACTION:.0%} of the "

@@ -13,7 +13,8 @@ evaluation targets (goal tasks have several).
 
 from __future__ import annotations
 
-from typing import Any
+import zlib
+from typing import Any, Callable
 
 import numpy as np
 
@@ -67,6 +68,31 @@ def seeded(seed: int = 0) -> None:
     np.random.seed(seed)  # noqa: NPY002 (rliable resamples with the global generator)
 
 
+def key_seed(seed: int, key: str) -> int:
+    """The bootstrap seed of one learner (or pair of learners) ``key`` in a study seeded
+    with ``seed``: a stream of its own, so adding a learner's runs to a study leaves every
+    other learner's intervals as they were."""
+    return (int(seed) * 1_000_003 + zlib.crc32(key.encode())) % 2**32
+
+
+def per_key(
+    estimate: Callable[[dict[str, Any]], tuple[dict[str, Any], dict[str, Any]]],
+    data: dict[str, Any],
+    seed: int,
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """rliable's ``(point, interval)`` dicts of ``estimate`` over ``data``, one key at a time,
+    each with the global generator seeded by :func:`key_seed` (rliable draws a key's
+    resamples after the previous key's, so one call over every key would tie them)."""
+    point: dict[str, Any] = {}
+    ci: dict[str, Any] = {}
+    for k, v in data.items():
+        seeded(key_seed(seed, k))
+        p, c = estimate({k: v})
+        point.update(p)
+        ci.update(c)
+    return point, ci
+
+
 def score_matrices(
     runs: list[dict[str, Any]], learners: list[str], tasks: list[str]
 ) -> tuple[dict[str, np.ndarray], list[int]]:
@@ -111,10 +137,10 @@ def aggregates(
             ]
         )
 
-    seeded(seed)
-    point, ci = rly.get_interval_estimates(scores, agg, reps=reps)
-    seeded(seed)
-    profiles, profile_cis = rly.create_performance_profile(scores, TAUS, reps=reps)
+    point, ci = per_key(lambda d: rly.get_interval_estimates(d, agg, reps=reps), scores, seed)
+    profiles, profile_cis = per_key(
+        lambda d: rly.create_performance_profile(d, TAUS, reps=reps), scores, seed
+    )
     names = [k for k in scores if k not in poi_exclude]
     # P(Y > X) = 1 - P(X > Y): one bootstrap per unordered pair.
     pairs = {
@@ -123,9 +149,10 @@ def aggregates(
     poi_point: dict[str, Any] = {}
     poi_ci: dict[str, Any] = {}
     if pairs:
-        seeded(seed)
-        poi_point, poi_ci = rly.get_interval_estimates(
-            pairs, metrics.probability_of_improvement, reps=reps
+        poi_point, poi_ci = per_key(
+            lambda d: rly.get_interval_estimates(d, metrics.probability_of_improvement, reps=reps),
+            pairs,
+            seed,
         )
     out: dict[str, Any] = {"learners": {}, "taus": TAUS.tolist(), "poi": {}}
     for k in scores:
@@ -170,8 +197,7 @@ def iqm_curves(
         # rliable's aggregate_iqm at every grid point at once (the same trimmed mean).
         return scipy.stats.trim_mean(x.reshape(-1, x.shape[-1]), proportiontocut=0.25, axis=0)
 
-    seeded(seed)
-    point, ci = rly.get_interval_estimates(data, iqm_at, reps=reps)
+    point, ci = per_key(lambda d: rly.get_interval_estimates(d, iqm_at, reps=reps), data, seed)
     return {
         lr: {
             "iqm": point[lr].tolist(),
