@@ -7,7 +7,7 @@ use common::check_poses_nd;
 use sixaxis_core::generator::{generate, GeneratorOptions};
 use sixaxis_core::names::expand_names;
 use sixaxis_core::planner::PosePoint;
-use sixaxis_core::replanning::{plan, PlanOptions, PlanResult};
+use sixaxis_core::replanning::{plan, LearnedPath, PlanOptions, PlanResult};
 use sixaxis_core::scenario::PoseSearchMode;
 use sixaxis_core::{GridWorld, PosePlanner, Scenario};
 
@@ -291,19 +291,26 @@ fn bfs_learner_plans_each_round_on_that_rounds_world() {
     }
 }
 
-/// A learner that returns a fixed path, to see the core reject it.
-struct Fixed(Vec<sixaxis_core::Cell>);
+/// A learner that returns the same result every round, to see what the core makes of it.
+struct Returns(LearnedPath);
 
-impl sixaxis_core::replanning::PathLearner for Fixed {
+impl Returns {
+    /// A fixed path.
+    fn path(path: Vec<sixaxis_core::Cell>) -> Self {
+        Returns(LearnedPath {
+            path: Some(path),
+            ..Default::default()
+        })
+    }
+}
+
+impl sixaxis_core::replanning::PathLearner for Returns {
     fn learn_path(
         &mut self,
         _world: &GridWorld,
         _round: &sixaxis_core::replanning::Round<'_>,
-    ) -> sixaxis_core::Result<sixaxis_core::replanning::LearnedPath> {
-        Ok(sixaxis_core::replanning::LearnedPath {
-            path: Some(self.0.clone()),
-            ..Default::default()
-        })
+    ) -> sixaxis_core::Result<LearnedPath> {
+        Ok(self.0.clone())
     }
 }
 
@@ -327,39 +334,29 @@ fn invalid_learned_paths_are_rejected_with_the_rule_they_break() {
         (Vec::new(), "empty path"),
     ];
     for (path, words) in cases {
-        let e = plan(&s, &o, Some(&mut Fixed(path)), None).unwrap_err();
+        let e = plan(&s, &o, Some(&mut Returns::path(path)), None).unwrap_err();
         let text = e.to_string();
         assert!(text.contains(words), "{text}");
         assert!(text.starts_with("invalid argument `path`"), "{text}");
     }
-    let ok = plan(&s, &o, Some(&mut Fixed(good.clone())), None).unwrap();
+    let ok = plan(&s, &o, Some(&mut Returns::path(good.clone())), None).unwrap();
     assert!(ok.success && ok.path == good);
-}
-
-/// A learner that finds no path, with or without a reason of its own.
-struct Refuses(Option<&'static str>);
-
-impl sixaxis_core::replanning::PathLearner for Refuses {
-    fn learn_path(
-        &mut self,
-        _world: &GridWorld,
-        _round: &sixaxis_core::replanning::Round<'_>,
-    ) -> sixaxis_core::Result<sixaxis_core::replanning::LearnedPath> {
-        Ok(sixaxis_core::replanning::LearnedPath {
-            no_path_reason: self.0.map(str::to_string),
-            ..Default::default()
-        })
-    }
 }
 
 #[test]
 fn a_learners_own_reason_for_no_path_is_the_failure_with_its_round() {
     let s = Scenario::load("paper_simple").unwrap();
     let o = PlanOptions::from_scenario(&s);
+    let refuses = |reason: Option<&str>| {
+        Returns(LearnedPath {
+            no_path_reason: reason.map(str::to_string),
+            ..Default::default()
+        })
+    };
     let own = plan(
         &s,
         &o,
-        Some(&mut Refuses(Some("the start is blocked"))),
+        Some(&mut refuses(Some("the start is blocked"))),
         None,
     )
     .unwrap();
@@ -368,27 +365,15 @@ fn a_learners_own_reason_for_no_path_is_the_failure_with_its_round() {
         own.failure.as_deref(),
         Some("the start is blocked (round 0)")
     );
-    let default = plan(&s, &o, Some(&mut Refuses(None)), None).unwrap();
+    let default = plan(&s, &o, Some(&mut refuses(None)), None).unwrap();
     assert_eq!(
         default.failure.as_deref(),
         Some("the path learner found no path to the target (round 0)")
     );
     // A reason beside a path is not read: the path is planned.
-    struct PathAndReason(Vec<sixaxis_core::Cell>);
-    impl sixaxis_core::replanning::PathLearner for PathAndReason {
-        fn learn_path(
-            &mut self,
-            _world: &GridWorld,
-            _round: &sixaxis_core::replanning::Round<'_>,
-        ) -> sixaxis_core::Result<sixaxis_core::replanning::LearnedPath> {
-            Ok(sixaxis_core::replanning::LearnedPath {
-                path: Some(self.0.clone()),
-                no_path_reason: Some("unused".into()),
-                ..Default::default()
-            })
-        }
-    }
     let good = GridWorld::new(&s).unwrap().shortest_path().unwrap();
-    let ok = plan(&s, &o, Some(&mut PathAndReason(good)), None).unwrap();
+    let mut both = Returns::path(good);
+    both.0.no_path_reason = Some("unused".into());
+    let ok = plan(&s, &o, Some(&mut both), None).unwrap();
     assert!(ok.success && ok.failure.is_none());
 }
