@@ -168,7 +168,7 @@ def test_random_search_space_has_schedules_and_few_compiled_groups():
 def test_tuner_set_fixes_a_value_and_keeps_the_other_draws(tmp_path, monkeypatch):
     seen = {}
 
-    def fake_tune(algo, suite, budget, candidates, seeds, tasks, log=None):
+    def fake_tune(algo, suite, budget, candidates, seeds, tasks, log=None, parts=None):
         seen["candidates"] = candidates
         raise SystemExit(0)  # the draw is what is under test
 
@@ -226,6 +226,79 @@ def test_tuner_writes_every_trial_and_merges_the_best(tmp_path, monkeypatch):
     assert entry["status"] == "tuned" and entry["objective"] == best["objective"]
     assert entry["values"] == data["trials"][data["best_trial"]]["values"]
     assert entry["trials"] == str(out) and entry["n_trials"] == 3
+
+
+def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypatch):
+    # Two static groups (net_arch drawn per group) on two tasks: four compiled groups.
+    monkeypatch.setattr(
+        jax_tune,
+        "space",
+        lambda algo, rng: (
+            {**TINY_PPO, "net_arch": [[8], [16]][int(rng.integers(2))]},
+            {"learning_rate": float(rng.uniform(1e-4, 3e-3))},
+        ),
+    )
+    argv = [
+        "--algo", "ppo", "--suite", "v1", "--tasks", "tune-gen-easy-1000,tune-gen-medium-1001",
+        "--budget", "512", "--trials", "4", "--seeds", "2", "--groups", "2",
+        "--sampler-seed", "3",
+    ]  # fmt: skip
+    whole = jax_tune.main([*argv, "--out", str(tmp_path / "a" / "t.json"),
+                           "--hyperparams", str(tmp_path / "a" / "hp.json")])  # fmt: skip
+    assert whole["resumed_groups"] == 0
+    assert not (tmp_path / "a" / "t.json.parts").exists()  # removed once on record
+
+    # A stop during the second task: its first group's outcome is not saved.
+    calls = []
+    run = jax_learners.Compiled.run
+
+    def stopping(self, candidates, seeds):
+        calls.append(self.task.id)
+        if self.task.id == "tune-gen-medium-1001":
+            raise KeyboardInterrupt
+        return run(self, candidates, seeds)
+
+    out, hp = tmp_path / "b" / "t.json", tmp_path / "b" / "hp.json"
+    monkeypatch.setattr(jax_learners.Compiled, "run", stopping)
+    with pytest.raises(KeyboardInterrupt):
+        jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
+    parts = sorted((tmp_path / "b" / "t.json.parts").iterdir())
+    assert [p.name.split("--")[0] for p in parts] == ["tune-gen-easy-1000"] * 2
+    assert not out.exists() and not hp.exists()
+
+    # The same command again trains only what is missing, and records what a whole run does.
+    calls.clear()
+    monkeypatch.setattr(
+        jax_learners.Compiled,
+        "run",
+        lambda self, c, s: calls.append(self.task.id) or run(self, c, s),
+    )
+    again = jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
+    assert calls == ["tune-gen-medium-1001"] * 2 and again["resumed_groups"] == 2
+    for a, b in zip(whole["trials"], again["trials"]):
+        assert (a["values"], a["final_score"], a["curves"]) == (
+            b["values"],
+            b["final_score"],
+            b["curves"],
+        )
+    assert again["best_trial"] == whole["best_trial"]
+    # The resumed groups' own times count: the total is no less than their sum.
+    saved = sum(t["wall_s"] for t in again["per_task_timing"])
+    assert again["wall_time_s"] >= saved - 1e-6 > 0
+    assert not (tmp_path / "b" / "t.json.parts").exists()
+
+    # A saved outcome from another search (its identity differs) is trained again, not read.
+    calls.clear()
+    monkeypatch.setattr(jax_learners.Compiled, "run", stopping)
+    with pytest.raises(KeyboardInterrupt):
+        jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
+    part = sorted((tmp_path / "b" / "t.json.parts").iterdir())[0]
+    data = json.loads(part.read_text())
+    part.write_text(json.dumps({**data, "ident": "0" * 64}))
+    calls.clear()
+    with pytest.raises(KeyboardInterrupt):
+        jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
+    assert calls == ["tune-gen-easy-1000", "tune-gen-medium-1001"]
 
 
 def test_run_group_records_read_by_the_report(tmp_path):

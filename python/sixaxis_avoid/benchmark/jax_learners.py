@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from sixaxis_avoid._deps import require
+from sixaxis_avoid.benchmark._io import atomic_write_text
 from sixaxis_avoid.benchmark.jax_values import (  # re-exported: the learners' public names
     ACTIVATIONS,
     ALGOS,
@@ -484,33 +485,96 @@ def train_candidates(
     seeds: list[int],
     budget: int,
     checkpoints: list[int] | None = None,
+    parts: Path | None = None,
 ) -> list[dict[str, Any]]:
     """Train every candidate (a values dict) x every seed on ``task`` for ``budget`` env
     steps: one compiled, vmapped call per group of equal :data:`STATIC` values. Returns one
     entry per candidate, in order: its values, group, per-seed curves (``success``,
     ``spl``: lists of S lists, one value per checkpoint), ``env_steps`` of the checkpoints,
-    and the group's timing."""
+    the group's timing (``group_wall_s`` and ``group_cpu_s``: compiling and training),
+    whether the group was ``resumed`` and its ``part`` file (or None).
+
+    With ``parts`` (a directory), each group's outcome is saved there as it finishes, and a
+    group whose saved outcome matches (same task, candidates, seeds, budget, checkpoints and
+    versions of jax and rejax: :func:`group_part`) is read back instead of trained again, so a
+    long search stopped midway resumes where it stopped."""
     checked = [check_values(algo, c) for c in candidates]
+    checkpoints = checkpoints or [budget]
     groups: dict[str, list[int]] = {}
     for i, c in enumerate(checked):
         groups.setdefault(static_key(algo, c), []).append(i)
     results: list[dict[str, Any] | None] = [None] * len(checked)
     for g, idx in enumerate(groups.values()):
-        comp = compiled_group(algo, task, checked[idx[0]], budget, checkpoints or [budget])
-        r = comp.run([checked[i] for i in idx], seeds)
+        members = [checked[i] for i in idx]
+        path, ident = (None, None)
+        if parts is not None:
+            path, ident = group_part(Path(parts), algo, task, members, seeds, budget, checkpoints)
+        saved = json.loads(path.read_text()) if path is not None and path.exists() else None
+        if saved is None or saved.get("ident") != ident:
+            t0, c0 = time.perf_counter(), time.process_time()
+            comp = compiled_group(algo, task, members[0], budget, checkpoints)
+            r = comp.run(members, seeds)
+            saved = {
+                "ident": ident,
+                "env_steps": [int(x) for x in r["env_steps"]],
+                "success": r["out"]["success"].tolist(),
+                "spl": r["out"]["spl"].tolist(),
+                "compile_s": r["compile_s"],
+                "train_wall_s": r["train_wall_s"],
+                "train_cpu_s": r["train_cpu_s"],
+                "group_wall_s": time.perf_counter() - t0,
+                "group_cpu_s": time.process_time() - c0,
+            }
+            resumed = False
+            if path is not None:
+                atomic_write_text(path, json.dumps(saved) + "\n")
+        else:
+            resumed = True
         for j, i in enumerate(idx):
             results[i] = {
                 "values": checked[i],
                 "group": g,
                 "group_size": len(idx),
-                "env_steps": r["env_steps"],
-                "success": r["out"]["success"][j].tolist(),
-                "spl": r["out"]["spl"][j].tolist(),
-                "compile_s": r["compile_s"],
-                "train_wall_s": r["train_wall_s"],
-                "train_cpu_s": r["train_cpu_s"],
+                "env_steps": saved["env_steps"],
+                "success": saved["success"][j],
+                "spl": saved["spl"][j],
+                "resumed": resumed,
+                "part": None if path is None else str(path),
+                **{k: saved[k] for k in ("compile_s", "train_wall_s", "train_cpu_s")},
+                **{k: saved[k] for k in ("group_wall_s", "group_cpu_s")},
             }
     return [r for r in results if r is not None]
+
+
+def group_part(
+    parts: Path,
+    algo: str,
+    task: Any,
+    members: list[dict[str, Any]],
+    seeds: list[int],
+    budget: int,
+    checkpoints: list[int],
+) -> tuple[Path, str]:
+    """Where :func:`train_candidates` saves one group's outcome, and the identity (a
+    sha256) a saved outcome must carry to be read back: the algorithm, the task (id, kind,
+    spec), the group's checked values, the seeds, the budget (env steps), the checkpoints
+    and the versions of jax and rejax."""
+    import hashlib
+
+    versions = {}
+    for pkg in ("jax", "rejax"):
+        try:
+            versions[pkg] = importlib.metadata.version(pkg)
+        except importlib.metadata.PackageNotFoundError:
+            versions[pkg] = None
+    blob = json.dumps(
+        [algo, task.id, task.kind, task.spec, members, list(seeds), int(budget),
+         [int(c) for c in checkpoints], versions],
+        sort_keys=True,
+        default=str,
+    )  # fmt: skip
+    ident = hashlib.sha256(blob.encode()).hexdigest()
+    return parts / f"{task.id}--{ident[:16]}.json", ident
 
 
 # ------------------------------------------------------------------------------------------

@@ -17,6 +17,10 @@ trained at once, vmapped, on the suite's tuning tasks::
   targets, at the budget) over tasks and seeds.
 - ``--set NAME=JSON`` fixes a value for every trial (after the draw, so the other draws
   stay the same), e.g. ``--set replay_sample='"with_replacement"'`` for DQN.
+- The search resumes: each compiled group's outcome is saved in ``--parts`` (default
+  ``OUT.parts``) as it finishes, and the same command run again reads those back and trains
+  only the rest (a long search can span several sessions). The trials file's wall and CPU
+  times add up the groups' own, wherever they ran; the parts go once it is written.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
   ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
@@ -110,24 +114,36 @@ def tune(
     seeds: list[int],
     tasks: list[Any] | None = None,
     log: Any = None,
+    parts: Path | None = None,
 ) -> dict[str, Any]:
-    """Train every candidate on every tuning task and seed; score and rank them."""
+    """Train every candidate on every tuning task and seed; score and rank them. With
+    ``parts`` (a directory), each compiled group's outcome is saved there as it finishes and
+    read back on a rerun (:func:`jax_learners.train_candidates`): a search stopped midway
+    resumes. Its wall and CPU times then add the saved groups' own times to this process's,
+    and ``resumed_groups`` counts them; ``part_files`` lists the saved outcomes (not part
+    of the trials file: :func:`main` removes them once that file is written)."""
     tasks = suite.tuning_tasks if tasks is None else tasks
     if not tasks:
         raise jl.JaxLearnerError(f"suite {suite.name!r}: tuning.tasks is empty")
     per_task: dict[str, list[dict[str, Any]]] = {}
     timing: list[dict[str, Any]] = []
     t0, c0 = time.perf_counter(), time.process_time()
+    earlier_wall = earlier_cpu = 0.0  # the resumed groups' own times, from earlier processes
+    n_resumed = 0
     for task in tasks:
         t1 = time.perf_counter()
         per_task[task.id] = jl.train_candidates(
-            algo, task, candidates, seeds, budget, suite.checkpoints(budget)
+            algo, task, candidates, seeds, budget, suite.checkpoints(budget), parts=parts
         )
         groups = {r["group"]: r for r in per_task[task.id]}
+        resumed = [r for r in groups.values() if r["resumed"]]
+        n_resumed += len(resumed)
+        earlier_wall += sum(r["group_wall_s"] for r in resumed)
+        earlier_cpu += sum(r["group_cpu_s"] for r in resumed)
         timing.append(
             {
                 "task": task.id,
-                "wall_s": time.perf_counter() - t1,
+                "wall_s": time.perf_counter() - t1 + sum(r["group_wall_s"] for r in resumed),
                 "compile_s": sum(r["compile_s"] for r in groups.values()),
                 "train_wall_s": sum(r["train_wall_s"] for r in groups.values()),
             }
@@ -162,9 +178,11 @@ def tune(
         "trials": trials,
         "best_trial": best["number"],
         "best_value": best["objective"],
-        "wall_time_s": time.perf_counter() - t0,
-        "cpu_time_s": time.process_time() - c0,
+        "wall_time_s": time.perf_counter() - t0 + earlier_wall,
+        "cpu_time_s": time.process_time() - c0 + earlier_cpu,
+        "resumed_groups": n_resumed,
         "per_task_timing": timing,
+        "part_files": sorted({r["part"] for rows in per_task.values() for r in rows if r["part"]}),
     }
 
 
@@ -214,6 +232,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="hyperparameter file the best trial is merged into",
     )
     p.add_argument("--out", type=Path, required=True, help="trials file (JSON)")
+    p.add_argument(
+        "--parts",
+        type=Path,
+        default=None,
+        help="directory where each compiled group's outcome is saved as it finishes, so a "
+        "stopped search resumes on the same command (default: OUT.parts beside --out; "
+        "removed once the trials file is written)",
+    )
     return p.parse_args(argv)
 
 
@@ -241,10 +267,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         jl.check_values(a.algo, {**c, **fixed})
         for c in draw(a.algo, a.trials, a.groups, a.sampler_seed)
     ]
+    parts = a.parts or a.out.with_name(a.out.name + ".parts")
     result = tune(
         a.algo, suite, a.budget, candidates, seeds, tasks,
-        log=lambda m: print(m, file=sys.stderr),
+        log=lambda m: print(m, file=sys.stderr), parts=parts,
     )  # fmt: skip
+    part_files = [Path(f) for f in result.pop("part_files")]
     argv_s = argv if argv is not None else sys.argv[1:]
     command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
     learner = LEARNER[a.algo]
@@ -282,6 +310,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             "date": out["date"],
         },
     )
+    for f in part_files:  # the search is on record: its saved groups are not needed again
+        f.unlink(missing_ok=True)
+    if parts.is_dir() and not any(parts.iterdir()):
+        parts.rmdir()
     print(
         json.dumps({k: out[k] for k in ("best_trial", "best_value", "wall_time_s", "cpu_time_s")})
     )
