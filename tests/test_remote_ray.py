@@ -170,3 +170,33 @@ def test_the_benchmark_quick_suite_runs_on_both_nodes(two_node_cluster, tmp_path
     here = execute_run(one["spec"])
     assert here["result"]["curve"] == one["result"]["curve"]
     assert here["result"]["paths"] == one["result"]["paths"]
+
+
+def test_jax_groups_run_as_ray_tasks_on_the_cluster(two_node_cluster, tmp_path):
+    """A JAX learner's runs on a cluster: each group (its seeds of one task, vmapped) is a
+    Ray task on a node (``--jax-cpus`` capped at the nodes' one CPU, so it is scheduled),
+    and its records equal the same group run here, outside Ray."""
+    pytest.importorskip("rejax")
+    from sixaxis_avoid.benchmark import jax_runs
+    from sixaxis_avoid.benchmark.runner import load_runs
+
+    out = tmp_path / "quick-jax"
+    tiny = ["net_arch=[16,16]", "n_envs=4", "n_steps=16", "batch_size=32", "n_epochs=1"]
+    subprocess.run(
+        [sys.executable, "-m", "sixaxis_avoid.benchmark", "run", "--suite", "quick",
+         "--learners", "jax_ppo", "--address", two_node_cluster, "--out-dir", str(out),
+         "--jax-cpus", "2", "--no-progress", *[f"--set=jax_ppo.{t}" for t in tiny]],
+        env=ENV, check=True, capture_output=True, timeout=900,
+    )  # fmt: skip
+    runs = load_runs(out)
+    got = {(r["spec"]["task"]["id"], r["spec"]["seed"]) for r in runs}
+    assert got == {(t, s) for t in ("paper_simple", "gen-easy-0", "goal-paper_simple")
+                   for s in (0, 1)}  # fmt: skip
+    # Three groups on two one-CPU nodes: both nodes train (in the driver, all would be one).
+    alive = {n["NodeID"] for n in ray.nodes() if n["Alive"]}
+    assert {r["host"]["ray_node"] for r in runs} == alive and len(alive) == 2
+    one = [r for r in runs if r["spec"]["task"]["id"] == "paper_simple"]
+    here = jax_runs.run_group([r["spec"] for r in sorted(one, key=lambda r: r["spec"]["seed"])])
+    for a, b in zip(here, sorted(one, key=lambda r: r["spec"]["seed"])):
+        assert a["result"]["curve"] == b["result"]["curve"]
+        assert a["result"]["paths"] == b["result"]["paths"]

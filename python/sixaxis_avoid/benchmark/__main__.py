@@ -92,6 +92,13 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     )
     r.add_argument("--out-dir", type=Path, help="default results/bench/SUITE")
     add_ray_args(r)
+    r.add_argument(
+        "--jax-cpus",
+        type=int,
+        default=2,
+        help="Ray: CPUs each JAX group reserves (a JAX learner's seeds of one task and budget, "
+        "vmapped in one call; capped at the largest node's CPUs)",
+    )
 
     t = sub.add_parser("tune", help="Optuna study per deep learner on the tuning tasks")
     t.add_argument("--suite", default="v1")
@@ -171,7 +178,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     for name in ("budget_scale",):
         if getattr(args, name, 1.0) <= 0:
             p.error(f"--{name.replace('_', '-')} must be > 0")
-    for name in ("trials", "parallel_trials", "num_cpus", "reps"):
+    for name in ("trials", "parallel_trials", "num_cpus", "reps", "jax_cpus"):
         v = getattr(args, name, None)
         if v is not None and v < 1:
             p.error(f"--{name.replace('_', '-')} must be >= 1")
@@ -220,6 +227,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         num_cpus=args.num_cpus,
         use_ray=not args.no_ray,
         progress=not args.no_progress,
+        jax_cpus=args.jax_cpus,
     )
     manifest_path = out / "study.json"
     previous: dict[str, Any] = {}

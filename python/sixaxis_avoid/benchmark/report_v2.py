@@ -719,6 +719,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         report_command_v2(a, out),
         "```",
         "",
+        *cluster_how_to(suite.name, a["results_dir"]),
     ]  # fmt: skip
     if hist:
         L += [
@@ -730,6 +731,34 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             "",
         ]
     return "\n".join(L)
+
+
+def cluster_how_to(suite: str, results_dir: Any) -> list[str]:
+    """The *How to run* paragraph for a study larger than one machine: a Ray cluster."""
+    return [
+        "**On a Ray cluster**, for the budgets this machine cannot finish in a session "
+        "(tested on two nodes started on loopback: tests/test_remote_ray.py):",
+        "",
+        "```bash",
+        "ray start --head --port=6379                 # on the head node",
+        "ray start --address=HEAD:6379                # on every other node (same checkout and "
+        "environment)",
+        f"python -m sixaxis_avoid.benchmark run --suite {suite} --learners jax_ppo,ppo "
+        "--seeds 5 --budgets 1000000 --hyperparams python/sixaxis_avoid/benchmark/hyperparams/"
+        f"v2.json --address HEAD:6379 --no-progress --out-dir {results_dir}",
+        "```",
+        "",
+        "Each SB3 or tabular run is a Ray task of one CPU; a JAX learner's seeds of one task "
+        "and budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 2). The "
+        "run files are written where the driver runs, and the same command run again skips "
+        "the runs already there. A JAX search (`python -m sixaxis_avoid.benchmark.jax_tune`) "
+        "runs in one process and resumes from its saved groups (`--parts`), so it can span "
+        "sessions. It comes before a budget's runs: a run at a budget with no tuned entry uses "
+        "the learner's defaults and is marked untuned (and an SB3 learner that borrows "
+        "its JAX twin's values needs them borrowed first, `python -m "
+        "sixaxis_avoid.benchmark.borrow`).",
+        "",
+    ]
 
 
 def write_report_v2(

@@ -433,9 +433,15 @@ def run_study(
     use_ray: bool = True,
     progress: bool = True,
     on_result: Callable[[dict[str, Any]], None] | None = None,
+    jax_cpus: int = 2,
 ) -> dict[str, Any]:
     """Run the specs whose result file is missing, seed by seed (:func:`seed_major`);
-    returns counts and failures."""
+    returns counts and failures.
+
+    A JAX learner's runs of one task and budget train together, their seeds vmapped in one
+    call (``run_group`` of its class): on Ray each such group is one task that reserves
+    ``jax_cpus`` CPUs (XLA runs several threads; capped at the largest node's CPUs), beside
+    the other learners' runs, one CPU each."""
     out_dir = Path(out_dir)
     todo = [s for s in seed_major(specs) if not finished(out_dir, s)]
     skipped = len(specs) - len(todo)
@@ -451,30 +457,38 @@ def run_study(
 
     started = False
     jax_specs = [s for s in todo if s.get("family") == "jax"]
-    if jax_specs:  # all seeds of a (learner, task) in one vmapped call, in this process
-        cls = resolve(jax_specs[0]["learner"])  # the groups and their runs: jax_runs
-        for group in cls.groups(jax_specs):
-            for record in resolve(group[0]["learner"]).run_group(group):
-                done(record)
+    # The groups and their runs: jax_runs (all seeds of a learner, task and budget).
+    groups = resolve(jax_specs[0]["learner"]).groups(jax_specs) if jax_specs else []
     rest = [s for s in todo if s.get("family") != "jax"]
     if not use_ray:
+        for group in groups:
+            for record in run_jax_group(group):
+                done(record)
         for s in rest:
             done(execute_run(s))
-    elif rest:
+    elif groups or rest:
         import ray
 
         started = init_ray(address, num_cpus)
         try:
             remote = ray.remote(num_cpus=1, max_retries=0)(execute_run)
-            pending = {remote.remote(s): s for s in rest}
+            per_group = min(jax_cpus, max_node_cpus())
+            remote_group = ray.remote(num_cpus=per_group, max_retries=0)(run_jax_group)
+            # The long JAX groups first, then the single runs fill the CPUs they leave.
+            pending = {remote_group.remote(g): g for g in groups}
+            pending.update({remote.remote(s): [s] for s in rest})
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)
-                spec = pending.pop(ready[0])
+                ran = pending.pop(ready[0])
                 try:
-                    done(ray.get(ready[0]))
+                    out = ray.get(ready[0])
                 except ray.exceptions.RayError as e:
-                    failures.append((run_key(spec), str(e).splitlines()[-1][:500]))
-                    bar.update(1)
+                    for spec in ran:
+                        failures.append((run_key(spec), str(e).splitlines()[-1][:500]))
+                        bar.update(1)
+                    continue
+                for record in out if isinstance(out, list) else [out]:
+                    done(record)
         finally:
             if started:
                 ray.shutdown()
@@ -486,6 +500,20 @@ def run_study(
         "failures": failures,
         "wall_time_s": time.perf_counter() - t0,
     }
+
+
+def run_jax_group(group: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One JAX group's records (its learner's ``run_group``), in this process or a Ray
+    worker's."""
+    return resolve(group[0]["learner"]).run_group(group)
+
+
+def max_node_cpus() -> int:
+    """The most CPUs any live node of the connected Ray cluster has (at least 1)."""
+    import ray
+
+    cpus = [n["Resources"].get("CPU", 0) for n in ray.nodes() if n.get("Alive")]
+    return max(1, int(max(cpus, default=1)))
 
 
 # ------------------------------------------------------------------------------------------
