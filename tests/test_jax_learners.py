@@ -168,7 +168,7 @@ def test_random_search_space_has_schedules_and_few_compiled_groups():
 def test_tuner_set_fixes_a_value_and_keeps_the_other_draws(tmp_path, monkeypatch):
     seen = {}
 
-    def fake_tune(algo, suite, budget, candidates, seeds, tasks, log=None, parts=None):
+    def fake_tune(algo, suite, budget, candidates, seeds, tasks, **kwargs):
         seen["candidates"] = candidates
         raise SystemExit(0)  # the draw is what is under test
 

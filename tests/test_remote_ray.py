@@ -9,6 +9,7 @@ every Ray process of the machine as `ray stop` would.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import signal
@@ -200,3 +201,36 @@ def test_jax_groups_run_as_ray_tasks_on_the_cluster(two_node_cluster, tmp_path):
     for a, b in zip(here, sorted(one, key=lambda r: r["spec"]["seed"])):
         assert a["result"]["curve"] == b["result"]["curve"]
         assert a["result"]["paths"] == b["result"]["paths"]
+
+
+def test_a_jax_search_trains_its_groups_on_the_cluster(two_node_cluster, tmp_path):
+    """``jax_tune --address``: each compiled group (a task here) is a Ray task, and the
+    trials equal the same search run in this process."""
+    pytest.importorskip("rejax")
+    from sixaxis_avoid.benchmark import jax_tune
+
+    fixed = ["net_arch=[16,16]", "n_envs=4", "n_steps=16", "batch_size=32", "n_epochs=1",
+             "max_episode_steps=50"]  # fmt: skip
+    argv = ["--algo", "ppo", "--suite", "v1", "--tasks", "tune-gen-easy-1000,tune-gen-medium-1001",
+            "--budget", "512", "--trials", "3", "--seeds", "2",
+            *[f"--set={f}" for f in fixed]]  # fmt: skip
+    out = tmp_path / "ray" / "t.json"
+    subprocess.run(
+        [sys.executable, "-m", "sixaxis_avoid.benchmark.jax_tune", *argv, "--address",
+         two_node_cluster, "--out", str(out), "--hyperparams", str(tmp_path / "ray" / "hp.json")],
+        env=ENV, check=True, capture_output=True, timeout=900,
+    )  # fmt: skip
+    remote = json.loads(out.read_text())
+    assert remote["ray"] == two_node_cluster and remote["resumed_groups"] == 0
+    assert [t["task"] for t in remote["per_task_timing"]] == ["tune-gen-easy-1000",
+                                                             "tune-gen-medium-1001"]  # fmt: skip
+    here = jax_tune.main([*argv, "--out", str(tmp_path / "here" / "t.json"),
+                          "--hyperparams", str(tmp_path / "here" / "hp.json")])  # fmt: skip
+    for a, b in zip(here["trials"], remote["trials"]):
+        assert (a["values"], a["final_score"], a["curves"]) == (
+            b["values"],
+            b["final_score"],
+            b["curves"],
+        )
+    assert remote["best_trial"] == here["best_trial"]
+    assert not (tmp_path / "ray" / "t.json.parts").exists()

@@ -70,10 +70,11 @@ from sixaxis_avoid.benchmark.learners import whole_iterations
 
 __all__ = [
     "ACTIVATIONS", "ALGOS", "DEFAULTS", "DQN_DEFAULTS", "ENV_DEFAULTS", "LR_SCHEDULES",
-    "PPO_DEFAULTS", "STATIC", "TRACED", "Compiled", "JaxLearnerError", "check_values",
-    "compiled_group", "counting_env", "iteration_steps", "main", "parse_args", "parse_sets",
-    "rejax_classes", "rejax_config", "run", "sb3_speed", "static_key", "traced_fields",
-    "train_candidates", "updates_per_env_step",
+    "PPO_DEFAULTS", "STATIC", "TRACED", "Compiled", "GroupJob", "JaxLearnerError",
+    "candidate_groups", "candidate_rows", "check_values", "compiled_group", "counting_env",
+    "group_part", "iteration_steps", "main", "parse_args", "parse_sets", "rejax_classes",
+    "rejax_config", "run", "saved_group", "sb3_speed", "static_key", "traced_fields",
+    "train_candidates", "train_group", "train_in_process", "updates_per_env_step",
 ]  # fmt: skip
 
 
@@ -478,21 +479,109 @@ def compiled_group(
     return _GROUPS[key]
 
 
-def train_candidates(
+def candidate_groups(algo: str, candidates: list[dict[str, Any]]) -> list[list[int]]:
+    """The candidates' indices split by their :data:`STATIC` values (one compiled program
+    each), in order of first appearance."""
+    groups: dict[str, list[int]] = {}
+    for i, c in enumerate(candidates):
+        groups.setdefault(static_key(algo, check_values(algo, c)), []).append(i)
+    return list(groups.values())
+
+
+def train_group(
     algo: str,
     task: Any,
+    members: list[dict[str, Any]],
+    seeds: list[int],
+    budget: int,
+    checkpoints: list[int],
+) -> dict[str, Any]:
+    """Train one group (candidates of equal :data:`STATIC` values) x ``seeds`` on ``task``
+    in one compiled call: the per-candidate curves (``success``, ``spl``: C lists of S lists,
+    one value per checkpoint), the checkpoints' ``env_steps``, and the timing (seconds):
+    ``compile_s``, ``train_wall_s``, ``train_cpu_s`` and the whole group's ``group_wall_s``
+    and ``group_cpu_s``. Plain JSON values, so a Ray worker can return it."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    comp = compiled_group(algo, task, members[0], budget, checkpoints)
+    r = comp.run(members, seeds)
+    return {
+        "env_steps": [int(x) for x in r["env_steps"]],
+        "success": r["out"]["success"].tolist(),
+        "spl": r["out"]["spl"].tolist(),
+        "compile_s": r["compile_s"],
+        "train_wall_s": r["train_wall_s"],
+        "train_cpu_s": r["train_cpu_s"],
+        "group_wall_s": time.perf_counter() - t0,
+        "group_cpu_s": time.process_time() - c0,
+    }
+
+
+def saved_group(path: Path | None, ident: str | None) -> dict[str, Any] | None:
+    """The outcome saved at ``path`` if it carries ``ident`` (:func:`group_part`), else None."""
+    if path is None or not path.exists():
+        return None
+    saved = json.loads(path.read_text())
+    return saved if saved.get("ident") == ident else None
+
+
+def candidate_rows(
+    checked: list[dict[str, Any]],
+    idx: list[int],
+    g: int,
+    outcome: dict[str, Any],
+    resumed: bool,
+    path: Path | None,
+) -> dict[int, dict[str, Any]]:
+    """One :func:`train_candidates` entry per candidate of group ``g`` (indices ``idx``)."""
+    keys = ("compile_s", "train_wall_s", "train_cpu_s", "group_wall_s", "group_cpu_s")
+    return {
+        i: {
+            "values": checked[i],
+            "group": g,
+            "group_size": len(idx),
+            "env_steps": outcome["env_steps"],
+            "success": outcome["success"][j],
+            "spl": outcome["spl"][j],
+            "resumed": resumed,
+            "part": None if path is None else str(path),
+            **{k: outcome[k] for k in keys},
+        }
+        for j, i in enumerate(idx)
+    }
+
+
+#: One group to train: ``(algo, task, members, seeds, budget, checkpoints)``, the arguments
+#: of :func:`train_group`.
+GroupJob = tuple[str, Any, list[dict[str, Any]], list[int], int, list[int]]
+
+
+def train_in_process(jobs: list[GroupJob]) -> Any:
+    """:func:`train_candidates`' default ``dispatch``: the jobs one after another, here."""
+    for k, job in enumerate(jobs):
+        yield k, train_group(*job)
+
+
+def train_candidates(
+    algo: str,
+    tasks: list[Any],
     candidates: list[dict[str, Any]],
     seeds: list[int],
     budget: int,
     checkpoints: list[int] | None = None,
     parts: Path | None = None,
-) -> list[dict[str, Any]]:
-    """Train every candidate (a values dict) x every seed on ``task`` for ``budget`` env
-    steps: one compiled, vmapped call per group of equal :data:`STATIC` values. Returns one
-    entry per candidate, in order: its values, group, per-seed curves (``success``,
-    ``spl``: lists of S lists, one value per checkpoint), ``env_steps`` of the checkpoints,
-    the group's timing (``group_wall_s`` and ``group_cpu_s``: compiling and training),
+    dispatch: Any = None,
+    log: Any = None,
+) -> dict[str, list[dict[str, Any]]]:
+    """Train every candidate (a values dict) x every seed on each of ``tasks`` for
+    ``budget`` env steps: one compiled, vmapped call per task and group of equal
+    :data:`STATIC` values (:func:`train_group`). Returns, per task id, one entry per
+    candidate, in order: its values, group, per-seed curves (``success``, ``spl``: lists of
+    S lists, one value per checkpoint), ``env_steps`` of the checkpoints, the group's timing,
     whether the group was ``resumed`` and its ``part`` file (or None).
+
+    ``dispatch(jobs)`` trains the jobs (:data:`GroupJob`) and yields ``(index, outcome)`` as
+    each finishes, in any order: :func:`train_in_process` by default; a Ray dispatch spreads
+    them over a cluster (:mod:`sixaxis_avoid.benchmark.jax_tune`).
 
     With ``parts`` (a directory), each group's outcome is saved there as it finishes, and a
     group whose saved outcome matches (same task, candidates, seeds, budget, checkpoints and
@@ -500,50 +589,33 @@ def train_candidates(
     long search stopped midway resumes where it stopped."""
     checked = [check_values(algo, c) for c in candidates]
     checkpoints = checkpoints or [budget]
-    groups: dict[str, list[int]] = {}
-    for i, c in enumerate(checked):
-        groups.setdefault(static_key(algo, c), []).append(i)
-    results: list[dict[str, Any] | None] = [None] * len(checked)
-    for g, idx in enumerate(groups.values()):
-        members = [checked[i] for i in idx]
-        path, ident = (None, None)
-        if parts is not None:
-            path, ident = group_part(Path(parts), algo, task, members, seeds, budget, checkpoints)
-        saved = json.loads(path.read_text()) if path is not None and path.exists() else None
-        if saved is None or saved.get("ident") != ident:
-            t0, c0 = time.perf_counter(), time.process_time()
-            comp = compiled_group(algo, task, members[0], budget, checkpoints)
-            r = comp.run(members, seeds)
-            saved = {
-                "ident": ident,
-                "env_steps": [int(x) for x in r["env_steps"]],
-                "success": r["out"]["success"].tolist(),
-                "spl": r["out"]["spl"].tolist(),
-                "compile_s": r["compile_s"],
-                "train_wall_s": r["train_wall_s"],
-                "train_cpu_s": r["train_cpu_s"],
-                "group_wall_s": time.perf_counter() - t0,
-                "group_cpu_s": time.process_time() - c0,
-            }
-            resumed = False
-            if path is not None:
-                atomic_write_text(path, json.dumps(saved) + "\n")
-        else:
-            resumed = True
-        for j, i in enumerate(idx):
-            results[i] = {
-                "values": checked[i],
-                "group": g,
-                "group_size": len(idx),
-                "env_steps": saved["env_steps"],
-                "success": saved["success"][j],
-                "spl": saved["spl"][j],
-                "resumed": resumed,
-                "part": None if path is None else str(path),
-                **{k: saved[k] for k in ("compile_s", "train_wall_s", "train_cpu_s")},
-                **{k: saved[k] for k in ("group_wall_s", "group_cpu_s")},
-            }
-    return [r for r in results if r is not None]
+    groups = candidate_groups(algo, checked)
+    rows: dict[str, dict[int, dict[str, Any]]] = {t.id: {} for t in tasks}
+    jobs: list[GroupJob] = []
+    where: list[tuple[Any, int, Path | None, str | None]] = []
+    for task in tasks:
+        for g, idx in enumerate(groups):
+            members = [checked[i] for i in idx]
+            path, ident = (None, None)
+            if parts is not None:
+                path, ident = group_part(
+                    Path(parts), algo, task, members, seeds, budget, checkpoints
+                )
+            saved = saved_group(path, ident)
+            if saved is not None:
+                rows[task.id].update(candidate_rows(checked, idx, g, saved, True, path))
+            else:
+                jobs.append((algo, task, members, seeds, budget, checkpoints))
+                where.append((task, g, path, ident))
+    for k, outcome in (dispatch or train_in_process)(jobs):
+        task, g, path, ident = where[k]
+        out = {"ident": ident, **outcome}
+        if path is not None:
+            atomic_write_text(path, json.dumps(out) + "\n")
+        rows[task.id].update(candidate_rows(checked, groups[g], g, out, False, path))
+        if log:
+            log(f"{task.id} group {g}: {out['group_wall_s']:.0f} s")
+    return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
 
 
 def group_part(

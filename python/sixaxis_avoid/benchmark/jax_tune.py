@@ -17,6 +17,9 @@ trained at once, vmapped, on the suite's tuning tasks::
   targets, at the budget) over tasks and seeds.
 - ``--set NAME=JSON`` fixes a value for every trial (after the draw, so the other draws
   stay the same), e.g. ``--set replay_sample='"with_replacement"'`` for DQN.
+- ``--address`` trains the groups on a Ray cluster, each a Ray task of ``--group-cpus``
+  CPUs (``tasks x groups`` of them, 10 for suite v2), so a search that takes hours here
+  takes about one group's time on a cluster of that many nodes.
 - The search resumes: each compiled group's outcome is saved in ``--parts`` (default
   ``OUT.parts``) as it finishes, and the same command run again reads those back and trains
   only the rest (a long search can span several sessions). The trials file's wall and CPU
@@ -115,41 +118,40 @@ def tune(
     tasks: list[Any] | None = None,
     log: Any = None,
     parts: Path | None = None,
+    dispatch: Any = None,
 ) -> dict[str, Any]:
-    """Train every candidate on every tuning task and seed; score and rank them. With
-    ``parts`` (a directory), each compiled group's outcome is saved there as it finishes and
-    read back on a rerun (:func:`jax_learners.train_candidates`): a search stopped midway
-    resumes. Its wall and CPU times then add the saved groups' own times to this process's,
-    and ``resumed_groups`` counts them; ``part_files`` lists the saved outcomes (not part
-    of the trials file: :func:`main` removes them once that file is written)."""
+    """Train every candidate on every tuning task and seed; score and rank them.
+
+    With ``parts`` (a directory), each compiled group's outcome is saved there as it
+    finishes and read back on a rerun (:func:`jax_learners.train_candidates`): a search
+    stopped midway resumes, and ``resumed_groups`` counts the groups read back. ``dispatch``
+    trains the groups (default: here, one after another; :func:`ray_dispatch`: on a Ray
+    cluster). Times (seconds): ``wall_time_s`` is this call's plus the resumed groups' own;
+    ``cpu_time_s`` and each task's ``wall_s`` add up the groups' own (compiling and
+    training), wherever they ran. ``part_files`` lists the saved outcomes (not part of the
+    trials file: :func:`main` removes them once that file is written)."""
     tasks = suite.tuning_tasks if tasks is None else tasks
     if not tasks:
         raise jl.JaxLearnerError(f"suite {suite.name!r}: tuning.tasks is empty")
-    per_task: dict[str, list[dict[str, Any]]] = {}
+    t0 = time.perf_counter()
+    per_task = jl.train_candidates(
+        algo, tasks, candidates, seeds, budget, suite.checkpoints(budget),
+        parts=parts, dispatch=dispatch, log=log,
+    )  # fmt: skip
     timing: list[dict[str, Any]] = []
-    t0, c0 = time.perf_counter(), time.process_time()
-    earlier_wall = earlier_cpu = 0.0  # the resumed groups' own times, from earlier processes
-    n_resumed = 0
+    groups_all: list[dict[str, Any]] = []
     for task in tasks:
-        t1 = time.perf_counter()
-        per_task[task.id] = jl.train_candidates(
-            algo, task, candidates, seeds, budget, suite.checkpoints(budget), parts=parts
-        )
-        groups = {r["group"]: r for r in per_task[task.id]}
-        resumed = [r for r in groups.values() if r["resumed"]]
-        n_resumed += len(resumed)
-        earlier_wall += sum(r["group_wall_s"] for r in resumed)
-        earlier_cpu += sum(r["group_cpu_s"] for r in resumed)
+        groups = list({r["group"]: r for r in per_task[task.id]}.values())
+        groups_all += groups
         timing.append(
             {
                 "task": task.id,
-                "wall_s": time.perf_counter() - t1 + sum(r["group_wall_s"] for r in resumed),
-                "compile_s": sum(r["compile_s"] for r in groups.values()),
-                "train_wall_s": sum(r["train_wall_s"] for r in groups.values()),
+                "wall_s": sum(r["group_wall_s"] for r in groups),
+                "compile_s": sum(r["compile_s"] for r in groups),
+                "train_wall_s": sum(r["train_wall_s"] for r in groups),
             }
         )
-        if log:
-            log(f"{task.id}: {timing[-1]['wall_s']:.0f} s")
+    resumed = [r for r in groups_all if r["resumed"]]
     trials = []
     for i, values in enumerate(candidates):
         scores = {t: [row[-1] for row in per_task[t][i]["spl"]] for t in per_task}
@@ -178,12 +180,36 @@ def tune(
         "trials": trials,
         "best_trial": best["number"],
         "best_value": best["objective"],
-        "wall_time_s": time.perf_counter() - t0 + earlier_wall,
-        "cpu_time_s": time.process_time() - c0 + earlier_cpu,
-        "resumed_groups": n_resumed,
+        "wall_time_s": time.perf_counter() - t0 + sum(r["group_wall_s"] for r in resumed),
+        "cpu_time_s": sum(r["group_cpu_s"] for r in groups_all),
+        "resumed_groups": len(resumed),
         "per_task_timing": timing,
         "part_files": sorted({r["part"] for rows in per_task.values() for r in rows if r["part"]}),
     }
+
+
+def ray_dispatch(group_cpus: int) -> Any:
+    """A :func:`jax_learners.train_candidates` dispatch over the connected Ray cluster: each
+    group is a task reserving ``group_cpus`` CPUs (capped at the largest node's); outcomes
+    come back as they finish."""
+
+    def dispatch(jobs: list[Any]) -> Any:
+        import ray
+
+        from sixaxis_avoid.benchmark.runner import max_node_cpus
+
+        if not jobs:
+            return
+        remote = ray.remote(num_cpus=min(group_cpus, max_node_cpus()), max_retries=0)(
+            jl.train_group
+        )
+        pending = {remote.remote(*job): k for k, job in enumerate(jobs)}
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            k = pending.pop(ready[0])
+            yield k, ray.get(ready[0])
+
+    return dispatch
 
 
 def record_best(
@@ -240,7 +266,22 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "stopped search resumes on the same command (default: OUT.parts beside --out; "
         "removed once the trials file is written)",
     )
-    return p.parse_args(argv)
+    p.add_argument(
+        "--address",
+        default=None,
+        help="join this Ray cluster and train the groups there, each a Ray task (default: "
+        "one after another in this process)",
+    )
+    p.add_argument(
+        "--group-cpus",
+        type=int,
+        default=2,
+        help="with --address: CPUs each group reserves (capped at the largest node's)",
+    )
+    a = p.parse_args(argv)
+    if a.group_cpus < 1:
+        p.error(f"--group-cpus: {a.group_cpus} must be >= 1")
+    return a
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
@@ -268,10 +309,22 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for c in draw(a.algo, a.trials, a.groups, a.sampler_seed)
     ]
     parts = a.parts or a.out.with_name(a.out.name + ".parts")
-    result = tune(
-        a.algo, suite, a.budget, candidates, seeds, tasks,
-        log=lambda m: print(m, file=sys.stderr), parts=parts,
-    )  # fmt: skip
+    started = False
+    if a.address:
+        from sixaxis_avoid.benchmark.runner import init_ray
+
+        started = init_ray(a.address, None)
+    try:
+        result = tune(
+            a.algo, suite, a.budget, candidates, seeds, tasks,
+            log=lambda m: print(m, file=sys.stderr), parts=parts,
+            dispatch=ray_dispatch(a.group_cpus) if a.address else None,
+        )  # fmt: skip
+    finally:
+        if started:
+            import ray
+
+            ray.shutdown()
     part_files = [Path(f) for f in result.pop("part_files")]
     argv_s = argv if argv is not None else sys.argv[1:]
     command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
@@ -289,6 +342,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": machine(),
         "load_average": [round(x, 2) for x in os.getloadavg()],
+        "ray": a.address or "in-process",
         **result,
     }
     a.out.parent.mkdir(parents=True, exist_ok=True)

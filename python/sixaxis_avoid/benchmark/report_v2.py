@@ -752,8 +752,10 @@ def cluster_how_to(suite: str, results_dir: Any) -> list[str]:
         "and budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 2). The "
         "run files are written where the driver runs, and the same command run again skips "
         "the runs already there. A JAX search (`python -m sixaxis_avoid.benchmark.jax_tune`) "
-        "runs in one process and resumes from its saved groups (`--parts`), so it can span "
-        "sessions. It comes before a budget's runs: a run at a budget with no tuned entry uses "
+        "takes `--address` too: each compiled group (a tuning task and a draw of the static "
+        "knobs, 10 for this suite) is a Ray task of `--group-cpus` CPUs. It resumes from "
+        "the groups it saved (`--parts`), so on one machine it can span sessions. It comes "
+        "before a budget's runs: a run at a budget with no tuned entry uses "
         "the learner's defaults and is marked untuned (and an SB3 learner that borrows "
         "its JAX twin's values needs them borrowed first, `python -m "
         "sixaxis_avoid.benchmark.borrow`).",
