@@ -32,3 +32,13 @@ def deep_run_env_steps(spec: dict) -> int:
     if spec["learner"] in on_policy:
         grain *= int(hp.get("n_steps", on_policy[spec["learner"]]))
     return whole_iterations(spec["budget"], grain)
+
+
+def assert_same_trials(a: dict, b: dict) -> None:
+    """Two jax_tune searches gave the same trials (values, final scores, curves) and best."""
+    assert len(a["trials"]) == len(b["trials"])
+    for x, y in zip(a["trials"], b["trials"]):
+        assert (x["values"], x["final_score"], x["curves"]) == (
+            y["values"], y["final_score"], y["curves"],
+        )  # fmt: skip
+    assert a["best_trial"] == b["best_trial"]

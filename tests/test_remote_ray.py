@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import ray
+from _helpers import assert_same_trials
 from sixaxis_avoid.remote import RemoteVectorEnv, start_ray_servers
 from sixaxis_avoid.vector import SixAxisAvoidVectorEnv
 
@@ -226,11 +227,5 @@ def test_a_jax_search_trains_its_groups_on_the_cluster(two_node_cluster, tmp_pat
                                                              "tune-gen-medium-1001"]  # fmt: skip
     here = jax_tune.main([*argv, "--out", str(tmp_path / "here" / "t.json"),
                           "--hyperparams", str(tmp_path / "here" / "hp.json")])  # fmt: skip
-    for a, b in zip(here["trials"], remote["trials"]):
-        assert (a["values"], a["final_score"], a["curves"]) == (
-            b["values"],
-            b["final_score"],
-            b["curves"],
-        )
-    assert remote["best_trial"] == here["best_trial"]
+    assert_same_trials(here, remote)
     assert not (tmp_path / "ray" / "t.json.parts").exists()

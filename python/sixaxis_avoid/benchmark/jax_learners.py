@@ -595,17 +595,13 @@ def train_candidates(
     where: list[tuple[Any, int, Path | None, str | None]] = []
     for task in tasks:
         for g, idx in enumerate(groups):
-            members = [checked[i] for i in idx]
-            path, ident = (None, None)
-            if parts is not None:
-                path, ident = group_part(
-                    Path(parts), algo, task, members, seeds, budget, checkpoints
-                )
+            job = (algo, task, [checked[i] for i in idx], seeds, budget, checkpoints)
+            path, ident = (None, None) if parts is None else group_part(Path(parts), job)
             saved = saved_group(path, ident)
             if saved is not None:
                 rows[task.id].update(candidate_rows(checked, idx, g, saved, True, path))
             else:
-                jobs.append((algo, task, members, seeds, budget, checkpoints))
+                jobs.append(job)
                 where.append((task, g, path, ident))
     for k, outcome in (dispatch or train_in_process)(jobs):
         task, g, path, ident = where[k]
@@ -618,21 +614,15 @@ def train_candidates(
     return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
 
 
-def group_part(
-    parts: Path,
-    algo: str,
-    task: Any,
-    members: list[dict[str, Any]],
-    seeds: list[int],
-    budget: int,
-    checkpoints: list[int],
-) -> tuple[Path, str]:
-    """Where :func:`train_candidates` saves one group's outcome, and the identity (a
-    sha256) a saved outcome must carry to be read back: the algorithm, the task (id, kind,
-    spec), the group's checked values, the seeds, the budget (env steps), the checkpoints
+def group_part(parts: Path, job: GroupJob) -> tuple[Path, str]:
+    """Where :func:`train_candidates` saves one group's outcome (``job``: the arguments of
+    :func:`train_group`), and the identity (a sha256) a saved outcome must carry to be read
+    back: the algorithm, the task (id, kind, spec), the group's checked values, the seeds,
+    the budget (env steps), the checkpoints
     and the versions of jax and rejax."""
     import hashlib
 
+    algo, task, members, seeds, budget, checkpoints = job
     versions = {}
     for pkg in ("jax", "rejax"):
         try:
