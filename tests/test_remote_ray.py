@@ -178,7 +178,6 @@ def test_jax_groups_run_as_ray_tasks_on_the_cluster(two_node_cluster, tmp_path):
     """A JAX learner's runs on a cluster: each group (its seeds of one task, vmapped) is a
     Ray task on a node (``--jax-cpus`` capped at the nodes' one CPU, so it is scheduled),
     and its records equal the same group run here, outside Ray."""
-    pytest.importorskip("rejax")
     from sixaxis_avoid.benchmark import jax_runs
     from sixaxis_avoid.benchmark.runner import load_runs
 
@@ -207,7 +206,6 @@ def test_jax_groups_run_as_ray_tasks_on_the_cluster(two_node_cluster, tmp_path):
 def test_a_jax_search_trains_its_groups_on_the_cluster(two_node_cluster, tmp_path):
     """``jax_tune --address``: each compiled group (a task here) is a Ray task, and the
     trials equal the same search run in this process."""
-    pytest.importorskip("rejax")
     from sixaxis_avoid.benchmark import jax_tune
 
     fixed = ["net_arch=[16,16]", "n_envs=4", "n_steps=16", "batch_size=32", "n_epochs=1",

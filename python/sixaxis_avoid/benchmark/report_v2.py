@@ -26,6 +26,7 @@ from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.report_compute import compute_rows
+from sixaxis_avoid.benchmark.report_howto import how_to_run, report_command_v2
 from sixaxis_avoid.benchmark.runner import load_runs
 from sixaxis_avoid.benchmark.stats import fmt_ci, fmt_steps
 from sixaxis_avoid.benchmark.tasks import Suite, load_suite
@@ -304,13 +305,6 @@ def figures_v2(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
 
 # ------------------------------------------------------------------------------------------
 # Markdown
-
-
-def report_command_v2(a: dict[str, Any], out: Path) -> str:
-    return (
-        f"python -m sixaxis_avoid.benchmark report --suite {a['suite'].name} "
-        f"--results {a['results_dir']} --out {out}"
-    )
 
 
 def tuning_rows(a: dict[str, Any]) -> list[str]:
@@ -707,19 +701,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         "Training speed on each: docs/PERFORMANCE.md, *JAX learners*.",
         "",
         *STATISTICS,
-        "## How to run",
-        "",
-        "```bash",
-        "bash scripts/setup.sh && source .venv/bin/activate   # or: pip install -e '.[bench]'",
-        *(
-            (a["manifest"] or {}).get("commands", [])
-            or [f"python -m sixaxis_avoid.benchmark run --suite {suite.name} "
-                f"--out-dir {a['results_dir']}"]
-        ),
-        report_command_v2(a, out),
-        "```",
-        "",
-        *cluster_how_to(suite.name, a["results_dir"]),
+        *how_to_run(a, out),
     ]  # fmt: skip
     if hist:
         L += [
@@ -731,36 +713,6 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             "",
         ]
     return "\n".join(L)
-
-
-def cluster_how_to(suite: str, results_dir: Any) -> list[str]:
-    """The *How to run* paragraph for a study larger than one machine: a Ray cluster."""
-    return [
-        "**On a Ray cluster**, for the budgets this machine cannot finish in a session "
-        "(tested on two nodes started on loopback: tests/test_remote_ray.py):",
-        "",
-        "```bash",
-        "ray start --head --port=6379                 # on the head node",
-        "ray start --address=HEAD:6379                # on every other node (same checkout and "
-        "environment)",
-        f"python -m sixaxis_avoid.benchmark run --suite {suite} --learners jax_ppo,ppo "
-        "--seeds 5 --budgets 1000000 --hyperparams python/sixaxis_avoid/benchmark/hyperparams/"
-        f"v2.json --address HEAD:6379 --no-progress --out-dir {results_dir}",
-        "```",
-        "",
-        "Each SB3 or tabular run is a Ray task of one CPU; a JAX learner's seeds of one task "
-        "and budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 2). The "
-        "run files are written where the driver runs, and the same command run again skips "
-        "the runs already there. A JAX search (`python -m sixaxis_avoid.benchmark.jax_tune`) "
-        "takes `--address` too: each compiled group (a tuning task and a draw of the static "
-        "knobs, 10 for this suite) is a Ray task of `--group-cpus` CPUs. It resumes from "
-        "the groups it saved (`--parts`), so on one machine it can span sessions. It comes "
-        "before a budget's runs: a run at a budget with no tuned entry uses "
-        "the learner's defaults and is marked untuned (and an SB3 learner that borrows "
-        "its JAX twin's values needs them borrowed first, `python -m "
-        "sixaxis_avoid.benchmark.borrow`).",
-        "",
-    ]
 
 
 def write_report_v2(
