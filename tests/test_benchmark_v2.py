@@ -432,7 +432,7 @@ def test_a_package_hyperparameter_file_is_named_by_its_repository_path(tmp_path,
     assert hpmod.display_path(tmp_path / "mine.json") == "mine.json"
 
 
-def test_compute_section_sums_the_runs_and_counts_each_trials_file_once():
+def test_compute_section_sums_the_runs_and_counts_each_trials_file_once(monkeypatch):
     """The page's *Compute* rows: a learner's runs add up per budget, its tuning time comes
     from its own trials file, and a learner run with another's values (SB3 DQN with
     jax_dqn's) has no tuning time of its own."""
@@ -459,6 +459,16 @@ def test_compute_section_sums_the_runs_and_counts_each_trials_file_once():
     files = {e["trials"] for e in record["by_budget"].values()}
     all_tw = sum(json.loads((root / f).read_text())["wall_time_s"] for f in files) / 3600
     assert f"jax {all_tw + 0.1:.2f} h wall" in text and "deep 1.00 h wall, 0.50 h CPU" in text
+    # The JAX part's goal (2 h wall on this machine): stated with the runs still to come.
+    goal = "**Goal for the JAX part** (its learners' tuning and runs at every budget, on this "
+    assert f"{goal}machine): 2.00 h of wall time. Not met: {all_tw + 0.1:.2f} h wall" in text
+    later = {"suite": load_suite("v2"), "runs": runs, "missing_budgets": {"jax_dqn": [1000000]}}
+    assert "with jax_dqn at 1.00M still to run." in "\n".join(report_v2.compute_rows(later))
+    import sixaxis_avoid.benchmark.report_compute as rc
+
+    monkeypatch.setattr(rc, "JAX_GOAL_S", 1e9)  # a goal this study meets
+    met = "\n".join(report_v2.compute_rows({"suite": load_suite("v2"), "runs": runs}))
+    assert "of wall time. Met: " in met and "still to run" not in met
 
 
 def test_twin_agreement_compares_each_jax_learner_with_its_sb3_twin():

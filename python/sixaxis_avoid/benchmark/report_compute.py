@@ -19,6 +19,10 @@ from sixaxis_avoid.benchmark.stats import fmt_steps
 #: its own is read; times in seconds.
 ZERO = {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0}
 
+#: The JAX part's goal: the whole study of the JAX learners, tuning included, in 2 hours of
+#: wall time on the 2-core machine the project is developed on (seconds).
+JAX_GOAL_S = 2 * 3600.0
+
 
 def _trials_file(path: str) -> Path | None:
     """A tuning record's trials file, by its path from the working directory or from the
@@ -90,4 +94,21 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
         + ".",
         "",
     ]
+    if "jax" in totals:
+        w, c = totals["jax"]
+        todo = [
+            f"{lr} at {', '.join(fmt_steps(b) for b in bs)}"
+            for lr, bs in a.get("missing_budgets", {}).items()
+            if family.get(lr) == "jax"
+        ]
+        met = w <= JAX_GOAL_S and not todo
+        out += [
+            f"**Goal for the JAX part** (its learners' tuning and runs at every budget, on this "
+            f"machine): {h(JAX_GOAL_S)} h of wall time. "
+            + ("Met" if met else "Not met")
+            + f": {h(w)} h wall and {h(c)} core-hours so far ({w / JAX_GOAL_S:.1f}x the goal)"
+            + (f", with {'; '.join(todo)} still to run" if todo else "")
+            + ".",
+            "",
+        ]
     return out
