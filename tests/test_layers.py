@@ -64,6 +64,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.jax_runs",
     "sixaxis_avoid.benchmark.jax_tune",
     "sixaxis_avoid.benchmark.borrow",
+    "sixaxis_avoid.benchmark.sb3_tune",
     "sixaxis_avoid.benchmark.agreement",
     "sixaxis_avoid.benchmark.longer",
     "sixaxis_avoid.benchmark.report",

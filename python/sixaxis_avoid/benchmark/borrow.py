@@ -50,6 +50,22 @@ class BorrowError(ValueError):
     """A twin entry that cannot be borrowed (names the field and value)."""
 
 
+def sb3_values(learner: str, values: dict[str, Any], where: str) -> tuple[dict[str, Any], str]:
+    """A JAX learner's values (SB3's names) as the SB3 ``learner``'s settings: the
+    ``activation`` is checked to be SB3's MlpPolicy default and dropped, and so is DQN's
+    ``replay_sample`` (SB3 draws with replacement), which is returned beside the values
+    ("" for PPO). ``where`` names the values in an error."""
+    values = dict(values)
+    activation = values.pop("activation", SB3_ACTIVATION[learner])
+    if activation != SB3_ACTIVATION[learner]:
+        raise BorrowError(
+            f"{where}.activation: {activation!r} is not SB3's {learner.upper()} activation "
+            f"{SB3_ACTIVATION[learner]!r}"
+        )
+    sample = values.pop("replay_sample", "without_replacement") if learner == "dqn" else ""
+    return values, sample
+
+
 def borrowed_entry(data: dict[str, Any], learner: str, budget: int) -> dict[str, Any]:
     """The SB3 ``learner``'s entry at ``budget`` from its twin's entry in ``data``."""
     if learner not in TWIN:
@@ -61,16 +77,11 @@ def borrowed_entry(data: dict[str, Any], learner: str, budget: int) -> dict[str,
             f"learners.{twin}.by_budget.{int(budget)}: no tuned entry to borrow "
             f"(tune it first: python -m sixaxis_avoid.benchmark.jax_tune --algo {learner} ...)"
         )
-    values = dict(entry["values"])
-    activation = values.pop("activation", SB3_ACTIVATION[learner])
-    if activation != SB3_ACTIVATION[learner]:
-        raise BorrowError(
-            f"learners.{twin}.by_budget.{int(budget)}.values.activation: {activation!r} is "
-            f"not SB3's {learner.upper()} activation {SB3_ACTIVATION[learner]!r}"
-        )
+    values, sample = sb3_values(
+        learner, entry["values"], f"learners.{twin}.by_budget.{int(budget)}.values"
+    )
     draw = ""
     if learner == "dqn":
-        sample = values.pop("replay_sample", "without_replacement")
         draw = (
             "; minibatches drawn with replacement, as both draw them"
             if sample == "with_replacement"

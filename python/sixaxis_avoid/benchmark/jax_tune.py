@@ -109,6 +109,13 @@ def draw(algo: str, trials: int, groups: int, seed: int) -> list[dict[str, Any]]
     ]
 
 
+def tuning_seeds(suite: Any, n: int) -> list[int]:
+    """``n`` tuning seeds: the suite's ``tuning.seeds`` first, then consecutive ones (past
+    100 when it lists none), disjoint from the reported seeds."""
+    base = [int(s) for s in suite.tuning.get("seeds", [])]
+    return (base + [max(base, default=99) + 1 + i for i in range(n)])[:n]
+
+
 def tune(
     algo: str,
     suite: Any,
@@ -301,8 +308,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 f"({', '.join(known)})"
             )
         tasks = [known[t] for t in want]
-    base = [int(s) for s in suite.tuning.get("seeds", [])]
-    seeds = (base + [max(base, default=99) + 1 + i for i in range(a.seeds)])[: a.seeds]
+    seeds = tuning_seeds(suite, a.seeds)
     fixed = jl.parse_sets(a.set)
     candidates = [
         jl.check_values(a.algo, {**c, **fixed})

@@ -58,4 +58,14 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "defaults and is marked untuned (and an SB3 learner that borrows its JAX twin's "
         "values needs them borrowed first, `python -m sixaxis_avoid.benchmark.borrow`).",
         "",
+        "SB3's PPO and DQN can also be tuned by a search of their own at a budget, with the "
+        "JAX search's effort (its space and sampler, `--trials` draws x `--seeds` seeds on "
+        "the tuning tasks, the final SPL as objective) plus the twin's values as one more "
+        "candidate: `python -m sixaxis_avoid.benchmark.sb3_tune --learner ppo --suite "
+        f"{suite} --budget 300000 --trials 32 --seeds 3 --out docs/results/v2-tuning/"
+        "ppo-300000.json --record` (`--address` for a cluster). Its runs are benchmark runs "
+        "without re-plans, kept beside the trials file, so a stopped search resumes; "
+        "`--record` puts the best values in place of the borrowed ones, and that budget's "
+        "SB3 runs then run again on them.",
+        "",
     ]
