@@ -61,9 +61,8 @@ def candidates(
 ) -> list[dict[str, Any]]:
     """The search's candidates: ``{"name", "values"}``, the draws first (``trial0`` ...),
     then the twin's borrowed values (``twin``) if the hyperparameter file has them."""
-    algo = learner
     out = []
-    for k, v in enumerate(draw(algo, trials, trials, seed)):
+    for k, v in enumerate(draw(learner, trials, trials, seed)):  # SB3's and rejax's names agree
         values, _ = sb3_values(learner, v, f"candidate trial{k}")
         out.append({"name": f"trial{k}", "values": {**values, "implementation": implementation}})
     twin = hp_data.get("learners", {}).get(TWIN[learner], {}).get("by_budget", {})
