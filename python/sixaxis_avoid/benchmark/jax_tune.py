@@ -241,16 +241,26 @@ def record_best(
     return data
 
 
+def add_search_args(p: argparse.ArgumentParser, hyperparams_help: str) -> None:
+    """The options every random search at one budget shares (this one and ``sb3_tune``):
+    the budget, trials, seeds, sampler seed, hyperparameter file and trials file."""
+    p.add_argument("--budget", type=int, required=True, help="env steps per run")
+    p.add_argument("--trials", type=int, default=32, help="random draws")
+    p.add_argument("--seeds", type=int, default=3, help="seeds per trial and task")
+    p.add_argument("--sampler-seed", type=int, default=0)
+    p.add_argument(
+        "--hyperparams", type=Path, default=HYPERPARAMS_DIR / "v2.json", help=hyperparams_help
+    )
+    p.add_argument("--out", type=Path, required=True, help="trials file (JSON)")
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--algo", choices=jl.ALGOS, default="ppo")
     p.add_argument("--suite", default="v1", help="suite whose tuning.tasks are scored")
     p.add_argument("--tasks", default=None, help="comma-separated subset of the tuning tasks")
-    p.add_argument("--budget", type=int, required=True, help="env steps per run")
-    p.add_argument("--trials", type=int, default=32)
-    p.add_argument("--seeds", type=int, default=3, help="seeds per trial and task")
+    add_search_args(p, "hyperparameter file the best trial is merged into")
     p.add_argument("--groups", type=int, default=2, help="draws of the static knobs")
-    p.add_argument("--sampler-seed", type=int, default=0)
     p.add_argument(
         "--set",
         action="append",
@@ -258,13 +268,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         metavar="NAME=JSON",
         help="a value fixed for every trial, over the drawn ones (jax_learners --set syntax)",
     )
-    p.add_argument(
-        "--hyperparams",
-        type=Path,
-        default=HYPERPARAMS_DIR / "v2.json",
-        help="hyperparameter file the best trial is merged into",
-    )
-    p.add_argument("--out", type=Path, required=True, help="trials file (JSON)")
     p.add_argument(
         "--parts",
         type=Path,

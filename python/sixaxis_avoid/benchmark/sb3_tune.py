@@ -43,9 +43,8 @@ import numpy as np
 from sixaxis_avoid.benchmark import runner
 from sixaxis_avoid.benchmark._io import atomic_write_text
 from sixaxis_avoid.benchmark.borrow import TWIN, borrowed_entry, sb3_values
-from sixaxis_avoid.benchmark.hyperparams import HYPERPARAMS_DIR
 from sixaxis_avoid.benchmark.implementation import IMPLEMENTATIONS
-from sixaxis_avoid.benchmark.jax_tune import draw, record_best, tuning_seeds
+from sixaxis_avoid.benchmark.jax_tune import add_search_args, draw, record_best, tuning_seeds
 
 #: What the twin's borrowed values are called among the candidates.
 TWIN_CANDIDATE = "twin"
@@ -172,23 +171,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--learner", choices=sorted(TWIN), required=True)
     p.add_argument("--suite", default="v2", help="suite whose tuning.tasks are scored")
-    p.add_argument("--budget", type=int, required=True, help="env steps per run (on the axis)")
-    p.add_argument("--trials", type=int, default=32, help="random draws (the twin's are extra)")
-    p.add_argument("--seeds", type=int, default=3, help="seeds per trial and task")
-    p.add_argument("--sampler-seed", type=int, default=0)
+    add_search_args(p, "hyperparameter file: the twin's values are read from it")
     p.add_argument(
         "--implementation",
         default="sb3",
         help="the SB3 learner's implementation preset for every draw (sb3: SB3's own; rejax)",
     )
-    p.add_argument(
-        "--hyperparams",
-        type=Path,
-        default=HYPERPARAMS_DIR / "v2.json",
-        help="hyperparameter file: the twin's values are read from it",
-    )
     p.add_argument("--record", action="store_true", help="write the best into --hyperparams")
-    p.add_argument("--out", type=Path, required=True, help="trials file (JSON)")
     p.add_argument("--log-dir", type=Path, help="the runs (default: OUT.runs beside --out)")
     runner_args = p.add_argument_group("Ray")
     runner_args.add_argument("--address", help="join this Ray cluster")
