@@ -438,6 +438,7 @@ def test_compute_section_sums_the_runs_and_counts_each_trials_file_once(monkeypa
     jax_dqn's) has no tuning time of its own."""
     import json
 
+    from sixaxis_avoid.benchmark import report_compute as rc
     from sixaxis_avoid.benchmark import report_v2
     from sixaxis_avoid.benchmark.hyperparams import HYPERPARAMS_DIR
 
@@ -462,9 +463,28 @@ def test_compute_section_sums_the_runs_and_counts_each_trials_file_once(monkeypa
     # The JAX part's goal (2 h wall on this machine): stated with the runs still to come.
     goal = "**Goal for the JAX part** (its learners' tuning and runs at every budget, on this "
     assert f"{goal}machine): 2.00 h of wall time. Not met: {all_tw + 0.1:.2f} h wall" in text
+    # Why it is not met: the env steps trained (the searches' trials and seeds, the runs)
+    # over the CPU time, and the least wall time both cores would need for them.
+    tc_all = sum(json.loads((root / f).read_text())["cpu_time_s"] for f in files) + 36.0
+    steps = sum(rc.tuning_env_steps(json.loads((root / f).read_text())) for f in files) + 30000
+    first = json.loads((root / "docs/results/v2-tuning/jax_dqn-30000.json").read_text())
+    assert (
+        rc.tuning_env_steps(first)
+        == sum(
+            c["env_steps"][-1] * len(first["seeds"])
+            for t in first["trials"]
+            for c in t["curves"].values()
+        )
+        > 32 * 3 * 20000
+    )  # 32 trials x 3 seeds, five tasks of close to 30k env steps
+    assert (
+        f"trained {steps / 1e6:,.0f}M env steps so far" in text
+        and f"in {tc_all / 3600:.2f} core-hours: {steps / tc_all:,.0f} env steps per core-second"
+        in text
+        and f"that work alone takes {tc_all / 2 / 3600:.2f} h" in text
+    )
     later = {"suite": load_suite("v2"), "runs": runs, "missing_budgets": {"jax_dqn": [1000000]}}
     assert "with jax_dqn at 1.00M still to run." in "\n".join(report_v2.compute_rows(later))
-    import sixaxis_avoid.benchmark.report_compute as rc
 
     monkeypatch.setattr(rc, "JAX_GOAL_S", 1e9)  # a goal this study meets
     met = "\n".join(report_v2.compute_rows({"suite": load_suite("v2"), "runs": runs}))

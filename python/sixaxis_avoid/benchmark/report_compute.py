@@ -17,11 +17,26 @@ from sixaxis_avoid.benchmark.stats import fmt_steps
 
 #: A (learner, budget) row before anything is added: ``tuned`` is 1 once a trials file of
 #: its own is read; times in seconds.
-ZERO = {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0}
+ZERO = {"tuned": 0.0, "tune_wall": 0.0, "tune_cpu": 0.0, "wall": 0.0, "cpu": 0.0, "steps": 0.0}
 
 #: The JAX part's goal: the whole study of the JAX learners, tuning included, in 2 hours of
 #: wall time on the 2-core machine the project is developed on (seconds).
 JAX_GOAL_S = 2 * 3600.0
+
+#: The cores of the machine the goal is set on.
+GOAL_CORES = 2
+
+
+def tuning_env_steps(trials: dict[str, Any]) -> int:
+    """Env steps a search trained: for every trial, task and seed, its curve's last
+    checkpoint (on the goal task, counted over all targets)."""
+    seeds = len(trials.get("seeds", []))
+    return sum(
+        int(curve["env_steps"][-1]) * seeds
+        for t in trials.get("trials", [])
+        for curve in t.get("curves", {}).values()
+        if curve.get("env_steps")
+    )
 
 
 def _trials_file(path: str) -> Path | None:
@@ -48,6 +63,7 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
         timing = r.get("timing", {})  # a run file without timing adds nothing
         e["wall"] += float(timing.get("run_wall_time_s", timing.get("wall_time_s", 0.0)))
         e["cpu"] += float(timing.get("cpu_time_s", 0.0))
+        e["steps"] += float(r.get("result", {}).get("env_steps") or 0)
     seen: set[Path] = set()
     for lr, entry in data.get("learners", {}).items():
         for b, e in entry.get("by_budget", {}).items():
@@ -62,6 +78,7 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
             row["tuned"] = 1.0
             row["tune_wall"] += float(t["wall_time_s"])
             row["tune_cpu"] += float(t.get("cpu_time_s", 0.0))
+            row["steps"] += tuning_env_steps(t)
     if not rows:
         return []
 
@@ -84,18 +101,21 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
     for (lr, b), e in sorted(rows.items(), key=lambda kv: (kv[0][0], kv[0][1])):
         tune = f"{h(e['tune_wall'])} | {h(e['tune_cpu'])}" if e["tuned"] else "— | —"
         out.append(f"| {lr} | {fmt_steps(b)} | {tune} | {h(e['wall'])} | {h(e['cpu'])} |")
-        t = totals.setdefault(family.get(lr, "?"), [0.0, 0.0])
+        t = totals.setdefault(family.get(lr, "?"), [0.0, 0.0, 0.0])
         t[0] += e["tune_wall"] + e["wall"]
         t[1] += e["tune_cpu"] + e["cpu"]
+        t[2] += e["steps"]
     out += [
         "",
         "Per family, tuning and runs: "
-        + "; ".join(f"{fam} {h(w)} h wall, {h(c)} h CPU" for fam, (w, c) in sorted(totals.items()))
+        + "; ".join(
+            f"{fam} {h(w)} h wall, {h(c)} h CPU" for fam, (w, c, _) in sorted(totals.items())
+        )
         + ".",
         "",
     ]
     if "jax" in totals:
-        w, c = totals["jax"]
+        w, c, steps = totals["jax"]
         todo = [
             f"{lr} at {', '.join(fmt_steps(b) for b in bs)}"
             for lr, bs in a.get("missing_budgets", {}).items()
@@ -111,4 +131,18 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
             + ".",
             "",
         ]
+        if c > 0 and steps > 0:
+            floor = c / GOAL_CORES
+            out += [
+                f"Why: the JAX learners trained {steps / 1e6:,.0f}M env steps so far (every "
+                f"search trial's seeds, compiling included, and every run's first training; "
+                f"Algorithm 2's re-plan rounds are in the runs' wall time but not here) in "
+                f"{h(c)} core-hours: {steps / c:,.0f} env steps per core-second. With all "
+                f"{GOAL_CORES} cores busy all the time that work alone takes {h(floor)} h "
+                f"({floor / JAX_GOAL_S:.1f}x the goal), so no schedule meets the goal at this "
+                f"rate: it needs the training itself {floor / JAX_GOAL_S:.1f}x faster per core"
+                + (", before the budgets still to run" if todo else "")
+                + ".",
+                "",
+            ]
     return out
