@@ -95,7 +95,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     r.add_argument(
         "--jax-cpus",
         type=int,
-        default=2,
+        default=1,
         help="Ray: CPUs each JAX group reserves (a JAX learner's seeds of one task and budget, "
         "vmapped in one call; capped at the largest node's CPUs)",
     )

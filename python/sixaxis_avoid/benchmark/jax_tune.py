@@ -285,7 +285,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument(
         "--group-cpus",
         type=int,
-        default=2,
+        default=1,
         help="with --address: CPUs each group reserves (capped at the largest node's)",
     )
     a = p.parse_args(argv)

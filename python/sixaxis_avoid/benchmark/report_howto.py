@@ -48,7 +48,7 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "```",
         "",
         "Each SB3 or tabular run is a Ray task of one CPU; a JAX learner's seeds of one task "
-        "and budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 2). The "
+        "and budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 1). The "
         "run files are written where the driver runs, and the same command run again skips "
         "the runs already there. A JAX search (`python -m sixaxis_avoid.benchmark.jax_tune`) "
         "takes `--address` too: each compiled group (a tuning task and a draw of the static "

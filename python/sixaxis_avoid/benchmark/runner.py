@@ -433,14 +433,15 @@ def run_study(
     use_ray: bool = True,
     progress: bool = True,
     on_result: Callable[[dict[str, Any]], None] | None = None,
-    jax_cpus: int = 2,
+    jax_cpus: int = 1,
 ) -> dict[str, Any]:
     """Run the specs whose result file is missing, seed by seed (:func:`seed_major`);
     returns counts and failures.
 
     A JAX learner's runs of one task and budget train together, their seeds vmapped in one
     call (``run_group`` of its class): on Ray each such group is one task that reserves
-    ``jax_cpus`` CPUs (XLA runs several threads; capped at the largest node's CPUs), beside
+    ``jax_cpus`` CPUs (capped at the largest node's CPUs; 1 by default, since two groups on
+    one CPU each trained more per hour than one group on two: docs/PERFORMANCE.md), beside
     the other learners' runs, one CPU each."""
     out_dir = Path(out_dir)
     todo = [s for s in seed_major(specs) if not finished(out_dir, s)]
