@@ -20,7 +20,9 @@ import json
 import os
 import time
 
-OBS, ACTIONS = 13, 6
+from sixaxis_avoid.env import VECTOR_OBS_DIM as OBS  # the core's vector observation (13)
+
+ACTIONS = 6  # the six moves of eq. 3
 
 
 def ppo_flops_per_env_step(hidden: int, epochs: int) -> int:

@@ -133,14 +133,15 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
         ]
         if c > 0 and steps > 0:
             floor = c / GOAL_CORES
+            ratio = floor / JAX_GOAL_S
             out += [
                 f"Why: the JAX learners trained {steps / 1e6:,.0f}M env steps so far (every "
                 f"search trial's seeds, compiling included, and every run's first training; "
                 f"Algorithm 2's re-plan rounds are in the runs' wall time but not here) in "
                 f"{h(c)} core-hours: {steps / c:,.0f} env steps per core-second. With all "
                 f"{GOAL_CORES} cores busy all the time that work alone takes {h(floor)} h "
-                f"({floor / JAX_GOAL_S:.1f}x the goal), so no schedule meets the goal at this "
-                f"rate: it needs the training itself {floor / JAX_GOAL_S:.1f}x faster per core"
+                f"({ratio:.1f}x the goal), so no schedule meets the goal at this "
+                f"rate: it needs the training itself {ratio:.1f}x faster per core"
                 + (", before the budgets still to run" if todo else "")
                 + ".",
                 "",
