@@ -199,8 +199,10 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     """Merge a run of ``learner`` into ``new`` (outside the checkout) into suite v2's
     committed study ``v2``: its run files come in, and the manifest gains its command with
     the ``--out-dir`` rewritten to ``v2`` (the repository's path, as earlier merges did) and
-    its wall time (and ``extra_wall_s``: earlier attempts into ``new`` that stopped before
-    writing its manifest); a path inside the checkout becomes relative to it. A re-run
+    the wall time of every command into ``new`` (its ``wall_time_s_total``: a command that
+    was stopped and resumed counts up to its last finished run; ``extra_wall_s`` adds
+    attempts whose time no manifest holds); a path inside the checkout becomes relative to
+    it. A directory whose last command was stopped (``finished: false``) is refused. A re-run
     replaces the learner's runs at those budgets (the same set of run files): the old files
     go, with their commands and their own wall times. Run files none of which the study has
     (the learner's first runs at those budgets, or more seeds there) are added, and the
@@ -218,6 +220,8 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
         raise SystemExit(f"{new}: its {learner} runs are not the same set as {v2}'s")
     old_wall = sum(json.loads(f.read_text())["timing"]["run_wall_time_s"] for f in old_runs)
     man, fresh = (json.loads((d / "study.json").read_text()) for d in (v2, new))
+    if fresh.get("finished") is False:
+        raise SystemExit(f"{new}: its last command was stopped; run it again to finish the set")
     command = fresh["command"].replace(f"--out-dir {new}", f"--out-dir {v2}")
     command = command.replace(f"{ROOT}/", "")  # paths in the checkout, as the page's commands
     budget_flag = re.search(r"--budgets (\S+)", command)
@@ -241,7 +245,7 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
             "wall_time_s_now": fresh["wall_time_s_now"],
             "wall_time_s_total": man["wall_time_s_total"]
             - old_wall
-            + fresh["wall_time_s_now"]
+            + fresh["wall_time_s_total"]
             + extra_wall_s,
             "failures": [*man.get("failures", []), *fresh["failures"]],
             "learners": [

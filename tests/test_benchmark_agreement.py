@@ -166,6 +166,22 @@ def test_merge_v2_adds_a_new_learners_runs_and_replaces_a_re_run(tmp_path):
     assert man["runs"] == 4 and man["wall_time_s_total"] == 16.0 - 5.0 + 2.5 + 2.0
     assert man["commands"] == [*before, c.format("dqn", 30000, v2) + hp.format("")]
     assert (v2 / "runs" / "t__dqn__s0__b30000.json").exists()
+    # A directory filled by a command that was stopped and then resumed: the wall time of
+    # both (wall_time_s_total) comes in, not only the last command's; while its last
+    # command is stopped (finished: false) it is refused, and nothing in the study changes.
+    new4 = tmp_path / "new4"
+    study(new4, ["dqn"], [c.format("dqn", 30000, new4)],
+          [("t__dqn__s6__b30000.json", 1.0)], 3.0)  # fmt: skip
+    resumed = json.loads((new4 / "study.json").read_text())
+    (new4 / "study.json").write_text(json.dumps({**resumed, "finished": False}))
+    with pytest.raises(SystemExit, match="was stopped"):
+        mod.merge_v2("dqn", new4, v2)
+    assert json.loads((v2 / "study.json").read_text()) == man
+    resumed.update(finished=True, wall_time_s_now=1.0, wall_time_s_total=3.0)
+    (new4 / "study.json").write_text(json.dumps(resumed))
+    mod.merge_v2("dqn", new4, v2)
+    man = json.loads((v2 / "study.json").read_text())
+    assert man["runs"] == 5 and man["wall_time_s_total"] == 16.0 - 5.0 + 2.5 + 2.0 + 3.0
 
 
 def test_dqn_ablation_section_reads_the_cause_from_the_committed_figures():

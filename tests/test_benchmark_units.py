@@ -736,3 +736,43 @@ def test_dqn_squared_loss_is_half_the_squared_td_error_where_sb3s_is_huber():
     model.train(1, 32)
     assert model.logger.name_to_value["train/loss"] == pytest.approx(want, rel=1e-5)
     assert worst > 1 and huber < want  # the rewards scaled by 1e-4 still give TD errors > 1
+
+
+def test_a_stopped_run_command_keeps_its_wall_time_and_the_next_one_adds_to_it(
+    tmp_path, monkeypatch
+):
+    """`run` rewrites study.json after each finished run (finished: false), so a command
+    stopped part way (here by an interrupt in its third run) leaves its runs and its wall time
+    on record; the same command again runs only the rest, adds its own wall time and ends
+    with finished: true."""
+    from sixaxis_avoid.benchmark import runner
+
+    out = tmp_path / "bfs"
+    argv = ["run", "--suite", "quick", "--learners", "bfs", "--seeds", "2", "--no-ray"]
+    argv += ["--no-progress", "--out-dir", str(out)]
+    real, calls = runner.execute_run, []
+
+    def stopping(spec):
+        calls.append(spec)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(spec)
+
+    monkeypatch.setattr(runner, "execute_run", stopping)
+    with pytest.raises(KeyboardInterrupt):
+        cli.main(argv)
+    stopped = json.loads((out / "study.json").read_text())
+    assert stopped["finished"] is False and stopped["ran_now"] == 2
+    assert stopped["skipped_now"] == 0 and len(list((out / "runs").glob("*.json"))) == 2
+    assert 0 < stopped["wall_time_s_now"] == stopped["wall_time_s_total"]
+
+    monkeypatch.setattr(runner, "execute_run", real)
+    assert cli.main(argv) == 0
+    done = json.loads((out / "study.json").read_text())
+    total = done["runs"]
+    assert done["finished"] is True and done["skipped_now"] == 2
+    assert done["ran_now"] == total - 2 and len(list((out / "runs").glob("*.json"))) == total
+    assert done["wall_time_s_total"] == pytest.approx(
+        stopped["wall_time_s_total"] + done["wall_time_s_now"]
+    )
+    assert done["commands"] == stopped["commands"] and len(done["commands"]) == 1

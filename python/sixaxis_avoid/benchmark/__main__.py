@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -220,6 +221,54 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         raise SystemExit(f"--budgets: {e}") from e
     out = args.out_dir or Path("results") / "bench" / suite.name
     print(f"{len(specs)} runs ({len(learners)} learners) -> {out}", file=sys.stderr)
+    manifest_path = out / "study.json"
+    previous: dict[str, Any] = {}
+    if manifest_path.exists():
+        previous = json.loads(manifest_path.read_text())
+    if previous.get("finished") is False:
+        # An earlier command into this directory was stopped: its manifest (written after
+        # each of its runs) counts its wall time up to its last finished run.
+        print(f"{out}: resuming a command that was stopped", file=sys.stderr)
+    # A study directory can be filled by several commands (more seeds, another learner, a
+    # restart): the manifest keeps every command and the union of what they asked for.
+    command = command_line(argv)
+    commands = list(previous.get("commands", [previous["command"]] if previous else []))
+    if not commands or commands[-1] != command:
+        commands.append(command)
+
+    def write_manifest(res: dict[str, Any], finished: bool) -> None:
+        runner.write_manifest(
+            out,
+            {
+                "command": command,
+                "commands": commands,
+                "suite": suite.raw,
+                "learners": union(previous.get("learners", []), learners),
+                "tasks": union(previous.get("tasks", []), [t.id for t in (tasks or suite.tasks)]),
+                "seeds": sorted(set(previous.get("seeds", [])) | {s["seed"] for s in specs}),
+                "runs": res["runs"],
+                "ran_now": res["ran"],
+                "skipped_now": res["skipped"],
+                "wall_time_s_now": res["wall_time_s"],
+                "wall_time_s_total": previous.get("wall_time_s_total", 0.0) + res["wall_time_s"],
+                "ray": "in-process" if args.no_ray else (args.address or "local"),
+                "failures": res["failures"],
+                "finished": finished,
+            },
+        )
+
+    # After each finished run the manifest is rewritten (finished: false), so a command that
+    # is stopped (a session's time limit, a lost machine) leaves its wall time so far on
+    # record, and the next command into the directory adds to it.
+    started, ran_now = time.perf_counter(), 0
+    skipped = sum(runner.finished(out, s) for s in specs)
+
+    def on_result(_record: dict[str, Any]) -> None:
+        nonlocal ran_now
+        ran_now += 1
+        so_far = {"runs": len(specs), "ran": ran_now, "skipped": skipped, "failures": []}
+        write_manifest({**so_far, "wall_time_s": time.perf_counter() - started}, False)
+
     res = runner.run_study(
         specs,
         out,
@@ -228,35 +277,9 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         use_ray=not args.no_ray,
         progress=not args.no_progress,
         jax_cpus=args.jax_cpus,
+        on_result=on_result,
     )
-    manifest_path = out / "study.json"
-    previous: dict[str, Any] = {}
-    if manifest_path.exists():
-        previous = json.loads(manifest_path.read_text())
-    # A study directory can be filled by several commands (more seeds, another learner, a
-    # restart): the manifest keeps every command and the union of what they asked for.
-    command = command_line(argv)
-    commands = list(previous.get("commands", [previous["command"]] if previous else []))
-    if not commands or commands[-1] != command:
-        commands.append(command)
-    runner.write_manifest(
-        out,
-        {
-            "command": command,
-            "commands": commands,
-            "suite": suite.raw,
-            "learners": union(previous.get("learners", []), learners),
-            "tasks": union(previous.get("tasks", []), [t.id for t in (tasks or suite.tasks)]),
-            "seeds": sorted(set(previous.get("seeds", [])) | {s["seed"] for s in specs}),
-            "runs": res["runs"],
-            "ran_now": res["ran"],
-            "skipped_now": res["skipped"],
-            "wall_time_s_now": res["wall_time_s"],
-            "wall_time_s_total": previous.get("wall_time_s_total", 0.0) + res["wall_time_s"],
-            "ray": "in-process" if args.no_ray else (args.address or "local"),
-            "failures": res["failures"],
-        },
-    )
+    write_manifest(res, True)
     print(
         f"{res['ran']} ran, {res['skipped']} already done, {len(res['failures'])} failed, "
         f"{res['wall_time_s']:.1f} s",
