@@ -322,12 +322,27 @@ def test_v2_headline_sits_where_every_ranked_learner_ran(tmp_path):
     from sixaxis_avoid.benchmark.report_v2 import write_report_v2
 
     suite_path, out = write_synthetic_study(tmp_path)
-    for f in (out / "runs").glob("*__beta__*__b100000.json"):
+    # beta's 100k runs are in progress: 12 of its 30 sit beside the study, committed part
+    # way (study-pending/), and count nowhere until merged.
+    pending = tmp_path / "study-pending" / "beta-100000"
+    (pending / "runs").mkdir(parents=True)
+    for i, f in enumerate(sorted((out / "runs").glob("*__beta__*__b100000.json"))):
+        if i < 12:
+            (pending / "runs" / f.name).write_text(f.read_text())
         f.unlink()
+    cmd = "python -m sixaxis_avoid.benchmark run --learners beta --budgets 100000"
+    (pending / "study.json").write_text(json.dumps({
+        "command": cmd, "learners": ["beta"], "runs": 30, "finished": False,
+        "wall_time_s_total": 5400.0}))  # fmt: skip
     md = tmp_path / "BENCHMARKS.md"
     a = write_report_v2(out, md, reps=100, suite=str(suite_path))
     assert a["common_budgets"] == [1000, 10000]
     assert a["missing_budgets"] == {"beta": [100000]}
+    (p,) = a["in_progress"]
+    assert (p["made"], p["of"], p["budgets"], p["finished"]) == (12, 30, [100000], False)
+    assert (
+        f"beta at 100k, 12 of 30 runs in `{pending}` (1.5 h of wall time so far)." in md.read_text()
+    )
     # alpha is best at 10k; its plateau is checked at 100k, which only alpha ran (flat there).
     assert a["best"] == ["alpha"] and a["headline"]["budget"] == 10000
     assert a["headline"]["plateaued"]

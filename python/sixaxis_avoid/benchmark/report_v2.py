@@ -57,6 +57,23 @@ def fmt_wilson(w: dict[str, Any]) -> str:
     return f"{w['rate']:.3f} [{w['lo']:.3f}, {w['hi']:.3f}] ({w['successes']}/{w['trials']})"
 
 
+def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
+    """The run sets in progress (:func:`sets_in_progress`), for the headline's "not run yet"."""
+    if not pending:
+        return ""
+    return (
+        " In progress, committed part way beside the study and not in any figure until "
+        "complete (the same command, in each directory's `study.json`, runs the rest): "
+        + "; ".join(
+            f"{', '.join(p['learners'])} at {', '.join(fmt_steps(b) for b in p['budgets']) or '—'}"
+            f", {p['made']} of {p['of']} runs in `{p['dir']}` "
+            f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
+            for p in pending
+        )
+        + "."
+    )
+
+
 def fmt_steps_to(s: dict[str, Any], budget: int) -> str:
     """``42k [30k, 61k] (27/30 reached)``; a median or bound beyond the budget reads
     ``> budget``."""
@@ -72,6 +89,32 @@ def fmt_steps_to(s: dict[str, Any], budget: int) -> str:
 
 # ------------------------------------------------------------------------------------------
 # Analysis
+
+
+def sets_in_progress(results: Path) -> list[dict[str, Any]]:
+    """Run sets in progress beside the study ``results``: ``<results>-pending/<dir>``, each
+    filled by one `run` command that is too long for one sitting and committed part way, so
+    the command in its ``study.json`` resumes it on another day or machine. No figure reads
+    them; a complete set is merged into the study (``scripts/implementation_ablation.py
+    merge-v2``) and its directory removed."""
+    root = results.parent / f"{results.name}-pending"
+    out = []
+    for manifest in sorted(root.glob("*/study.json")):
+        man = json.loads(manifest.read_text())
+        runs = load_runs(manifest.parent) if (manifest.parent / "runs").is_dir() else []
+        out.append(
+            {
+                "dir": str(manifest.parent),
+                "learners": man["learners"],
+                "budgets": sorted({int(r["spec"]["budget"]) for r in runs}),
+                "made": len(runs),
+                "of": int(man["runs"]),
+                "finished": bool(man.get("finished", True)),
+                "wall_time_s_total": float(man.get("wall_time_s_total", 0.0)),
+                "command": man["command"],
+            }
+        )
+    return out
 
 
 def analyse_v2(
@@ -218,6 +261,7 @@ def analyse_v2(
             "common_budgets": common,
             "missing_budgets": missing,
             "over_budget": over,
+            "in_progress": sets_in_progress(results),
         }
     )
     a["twins"] = twin_agreement(a, reps=reps)
@@ -531,7 +575,8 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                     for lr, bs in a["missing_budgets"].items()
                 )
                 + ". Each is a tuning command and a run command per budget: those recorded "
-                "for the budgets run (*Tuning record*, *How to run*) with the budget changed.",
+                "for the budgets run (*Tuning record*, *How to run*) with the budget changed."
+                + in_progress_sentence(a["in_progress"]),
             ]
         L += [
             "",
