@@ -70,6 +70,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.report",
     "sixaxis_avoid.benchmark.report_compute",
     "sixaxis_avoid.benchmark.report_howto",
+    "sixaxis_avoid.benchmark.report_pending",
     "sixaxis_avoid.benchmark.twins",
     "sixaxis_avoid.benchmark.report_v2",
     "sixaxis_avoid.benchmark.tune",

@@ -27,6 +27,7 @@ from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.report_compute import compute_rows
 from sixaxis_avoid.benchmark.report_howto import how_to_run, report_command_v2
+from sixaxis_avoid.benchmark.report_pending import in_progress_sentence, sets_in_progress
 from sixaxis_avoid.benchmark.runner import load_runs
 from sixaxis_avoid.benchmark.stats import fmt_ci, fmt_steps
 from sixaxis_avoid.benchmark.tasks import Suite, load_suite
@@ -57,23 +58,6 @@ def fmt_wilson(w: dict[str, Any]) -> str:
     return f"{w['rate']:.3f} [{w['lo']:.3f}, {w['hi']:.3f}] ({w['successes']}/{w['trials']})"
 
 
-def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
-    """The run sets in progress (:func:`sets_in_progress`), for the headline's "not run yet"."""
-    if not pending:
-        return ""
-    return (
-        " In progress, committed part way beside the study and not in any figure until "
-        "complete (the same command, in each directory's `study.json`, runs the rest): "
-        + "; ".join(
-            f"{', '.join(p['learners'])} at {', '.join(fmt_steps(b) for b in p['budgets']) or '—'}"
-            f", {p['made']} of {p['of']} runs in `{p['dir']}` "
-            f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
-            for p in pending
-        )
-        + "."
-    )
-
-
 def fmt_steps_to(s: dict[str, Any], budget: int) -> str:
     """``42k [30k, 61k] (27/30 reached)``; a median or bound beyond the budget reads
     ``> budget``."""
@@ -89,32 +73,6 @@ def fmt_steps_to(s: dict[str, Any], budget: int) -> str:
 
 # ------------------------------------------------------------------------------------------
 # Analysis
-
-
-def sets_in_progress(results: Path) -> list[dict[str, Any]]:
-    """Run sets in progress beside the study ``results``: ``<results>-pending/<dir>``, each
-    filled by one `run` command that is too long for one sitting and committed part way, so
-    the command in its ``study.json`` resumes it on another day or machine. No figure reads
-    them; a complete set is merged into the study (``scripts/implementation_ablation.py
-    merge-v2``) and its directory removed."""
-    root = results.parent / f"{results.name}-pending"
-    out = []
-    for manifest in sorted(root.glob("*/study.json")):
-        man = json.loads(manifest.read_text())
-        runs = load_runs(manifest.parent) if (manifest.parent / "runs").is_dir() else []
-        out.append(
-            {
-                "dir": str(manifest.parent),
-                "learners": man["learners"],
-                "budgets": sorted({int(r["spec"]["budget"]) for r in runs}),
-                "made": len(runs),
-                "of": int(man["runs"]),
-                "finished": bool(man.get("finished", True)),
-                "wall_time_s_total": float(man.get("wall_time_s_total", 0.0)),
-                "command": man["command"],
-            }
-        )
-    return out
 
 
 def analyse_v2(

@@ -1,0 +1,60 @@
+"""Run sets in progress beside a study: ``<results>-pending/<dir>``, each one `run` command
+too long for one sitting, committed part way so that the same command resumes it on another
+day or machine (docs/results/v2-pending/README.md). No figure reads them; the v2 page names
+them in its headline.
+
+Entry points: :func:`sets_in_progress` (each set's learners, budgets, runs made of its
+command's, wall time so far) and :func:`in_progress_sentence` (the page's line).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from sixaxis_avoid.benchmark.runner import load_runs
+from sixaxis_avoid.benchmark.stats import fmt_steps
+
+
+def sets_in_progress(results: Path) -> list[dict[str, Any]]:
+    """Run sets in progress beside the study ``results``: ``<results>-pending/<dir>``, each
+    filled by one `run` command that is too long for one sitting and committed part way, so
+    the command in its ``study.json`` resumes it on another day or machine. No figure reads
+    them; a complete set is merged into the study (``scripts/implementation_ablation.py
+    merge-v2``) and its directory removed."""
+    root = results.parent / f"{results.name}-pending"
+    out = []
+    for manifest in sorted(root.glob("*/study.json")):
+        man = json.loads(manifest.read_text())
+        runs = load_runs(manifest.parent) if (manifest.parent / "runs").is_dir() else []
+        out.append(
+            {
+                "dir": str(manifest.parent),
+                "learners": man["learners"],
+                "budgets": sorted({int(r["spec"]["budget"]) for r in runs}),
+                "made": len(runs),
+                "of": int(man["runs"]),
+                "finished": bool(man.get("finished", True)),
+                "wall_time_s_total": float(man.get("wall_time_s_total", 0.0)),
+                "command": man["command"],
+            }
+        )
+    return out
+
+
+def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
+    """The run sets in progress (:func:`sets_in_progress`), for the headline's "not run yet"."""
+    if not pending:
+        return ""
+    return (
+        " In progress, committed part way beside the study and not in any figure until "
+        "complete (the same command, in each directory's `study.json`, runs the rest): "
+        + "; ".join(
+            f"{', '.join(p['learners'])} at {', '.join(fmt_steps(b) for b in p['budgets']) or '—'}"
+            f", {p['made']} of {p['of']} runs in `{p['dir']}` "
+            f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
+            for p in pending
+        )
+        + "."
+    )
