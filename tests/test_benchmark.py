@@ -107,6 +107,22 @@ def test_two_node_cluster_gives_the_same_results(local, specs, tmp_path):
         assert r["result"] == runs[key]["result"], key
 
 
+def test_progress_counts_finished_and_failed_runs_as_they_come(specs, tmp_path):
+    """`on_progress` gets the counts so far after each run, a failed one included (here a
+    learner no worker can import): what `run` writes into study.json during a command."""
+    bfs = [s for s in specs if s["learner"] == "bfs"][:2]
+    broken = {**bfs[1], "learner": "no_such_module_here:Learner"}
+    seen: list[dict] = []
+    res = runner.run_study([bfs[0], broken], tmp_path, num_cpus=1, progress=False,
+                           on_progress=seen.append)  # fmt: skip
+    assert [(c["ran"], len(c["failures"])) for c in seen] in ([(1, 0), (1, 1)], [(0, 1), (1, 1)])
+    assert res["ran"] == 1 and res["skipped"] == 0 and res["runs"] == 2
+    assert [k for k, _ in res["failures"]] == [runner.run_key(broken)]
+    assert seen[-1]["failures"] == res["failures"]
+    assert all(a["wall_time_s"] <= b["wall_time_s"] for a, b in zip(seen, seen[1:]))
+    assert not ray.is_initialized()
+
+
 def test_resume_skips_finished_runs(local, specs, tmp_path):
     out, runs = local
     shutil.copytree(out / "runs", tmp_path / "runs")

@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -260,15 +259,6 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     # After each finished run the manifest is rewritten (finished: false), so a command that
     # is stopped (a session's time limit, a lost machine) leaves its wall time so far on
     # record, and the next command into the directory adds to it.
-    started, ran_now = time.perf_counter(), 0
-    skipped = sum(runner.finished(out, s) for s in specs)
-
-    def on_result(_record: dict[str, Any]) -> None:
-        nonlocal ran_now
-        ran_now += 1
-        so_far = {"runs": len(specs), "ran": ran_now, "skipped": skipped, "failures": []}
-        write_manifest({**so_far, "wall_time_s": time.perf_counter() - started}, False)
-
     res = runner.run_study(
         specs,
         out,
@@ -277,7 +267,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         use_ray=not args.no_ray,
         progress=not args.no_progress,
         jax_cpus=args.jax_cpus,
-        on_result=on_result,
+        on_progress=lambda so_far: write_manifest(so_far, False),
     )
     write_manifest(res, True)
     print(

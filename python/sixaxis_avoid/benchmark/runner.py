@@ -433,10 +433,13 @@ def run_study(
     use_ray: bool = True,
     progress: bool = True,
     on_result: Callable[[dict[str, Any]], None] | None = None,
+    on_progress: Callable[[dict[str, Any]], None] | None = None,
     jax_cpus: int = 1,
 ) -> dict[str, Any]:
     """Run the specs whose result file is missing, seed by seed (:func:`seed_major`);
-    returns counts and failures.
+    returns counts and failures (``runs``, ``skipped``, ``ran``, ``failures``,
+    ``wall_time_s``). ``on_result`` gets each record as its file is written; ``on_progress``
+    gets those counts so far after each finished or failed run.
 
     A JAX learner's runs of one task and budget train together, their seeds vmapped in one
     call (``run_group`` of its class): on Ray each such group is one task that reserves
@@ -449,11 +452,25 @@ def run_study(
     bar = _progress(len(specs), skipped, progress)
     failures: list[tuple[str, str]] = []
     t0 = time.perf_counter()
+    ran = 0
+
+    def counts() -> dict[str, Any]:
+        return {
+            "runs": len(specs),
+            "skipped": skipped,
+            "ran": ran,
+            "failures": list(failures),
+            "wall_time_s": time.perf_counter() - t0,
+        }
 
     def done(record: dict[str, Any]) -> None:
+        nonlocal ran
         write_run(out_dir, record)
+        ran += 1
         if on_result:
             on_result(record)
+        if on_progress:
+            on_progress(counts())
         bar.update(1)
 
     started = False
@@ -480,13 +497,15 @@ def run_study(
             pending.update({remote.remote(s): [s] for s in rest})
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1)
-                ran = pending.pop(ready[0])
+                batch = pending.pop(ready[0])
                 try:
                     out = ray.get(ready[0])
                 except ray.exceptions.RayError as e:
-                    for spec in ran:
+                    for spec in batch:
                         failures.append((run_key(spec), str(e).splitlines()[-1][:500]))
                         bar.update(1)
+                    if on_progress:
+                        on_progress(counts())
                     continue
                 for record in out if isinstance(out, list) else [out]:
                     done(record)
@@ -494,13 +513,7 @@ def run_study(
             if started:
                 ray.shutdown()
     bar.close()
-    return {
-        "runs": len(specs),
-        "skipped": skipped,
-        "ran": len(todo) - len(failures),
-        "failures": failures,
-        "wall_time_s": time.perf_counter() - t0,
-    }
+    return counts()
 
 
 def run_jax_group(group: list[dict[str, Any]]) -> list[dict[str, Any]]:
