@@ -222,6 +222,10 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     man, fresh = (json.loads((d / "study.json").read_text()) for d in (v2, new))
     if fresh.get("finished") is False:
         raise SystemExit(f"{new}: its last command was stopped; run it again to finish the set")
+    if fresh.get("failures"):
+        # A command whose runs failed (or whose Ray went down under it) left them unmade.
+        n = len(fresh["failures"])
+        raise SystemExit(f"{new}: its last command left {n} runs failed; run it again")
     command = fresh["command"].replace(f"--out-dir {new}", f"--out-dir {v2}")
     command = command.replace(f"{ROOT}/", "")  # paths in the checkout, as the page's commands
     budget_flag = re.search(r"--budgets (\S+)", command)

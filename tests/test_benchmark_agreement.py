@@ -177,6 +177,12 @@ def test_merge_v2_adds_a_new_learners_runs_and_replaces_a_re_run(tmp_path):
     with pytest.raises(SystemExit, match="was stopped"):
         mod.merge_v2("dqn", new4, v2)
     assert json.loads((v2 / "study.json").read_text()) == man
+    # Likewise a command that ended with failed runs (they have no file yet).
+    failed = {**resumed, "finished": True, "failures": [["t__dqn__s7__b30000", "raylet died"]]}
+    (new4 / "study.json").write_text(json.dumps(failed))
+    with pytest.raises(SystemExit, match="left 1 runs failed"):
+        mod.merge_v2("dqn", new4, v2)
+    assert json.loads((v2 / "study.json").read_text()) == man
     resumed.update(finished=True, wall_time_s_now=1.0, wall_time_s_total=3.0)
     (new4 / "study.json").write_text(json.dumps(resumed))
     mod.merge_v2("dqn", new4, v2)
