@@ -123,6 +123,26 @@ def test_progress_counts_finished_and_failed_runs_as_they_come(specs, tmp_path):
     assert not ray.is_initialized()
 
 
+def test_a_stop_request_lets_the_running_runs_finish_and_hands_out_no_more(specs, tmp_path):
+    """`touch OUT_DIR/STOP` while a study runs on Ray (2 CPUs): runs are handed out only as
+    CPUs free up, so when the first run's file lands (and the stop is asked for) exactly two
+    runs had been handed out; the other one finishes and writes its file, no third starts, and
+    the same call later runs only the rest."""
+    bfs = [s for s in specs if s["learner"] == "bfs"][:5]
+    assert len(bfs) == 5
+
+    def ask_to_stop(_record):
+        (tmp_path / runner.STOP_FILE).touch()
+
+    res = runner.run_study(bfs, tmp_path, num_cpus=2, progress=False, on_result=ask_to_stop)
+    assert res["stopped"] is True and res["ran"] == 2 and not res["failures"]
+    assert len(list((tmp_path / "runs").glob("*.json"))) == 2
+    assert not (tmp_path / runner.STOP_FILE).exists(), "the stop request was left behind"
+    assert not ray.is_initialized()
+    again = runner.run_study(bfs, tmp_path, num_cpus=2, progress=False)
+    assert (again["skipped"], again["ran"], again["stopped"]) == (2, 3, False)
+
+
 def test_resume_skips_finished_runs(local, specs, tmp_path):
     out, runs = local
     shutil.copytree(out / "runs", tmp_path / "runs")

@@ -776,3 +776,35 @@ def test_a_stopped_run_command_keeps_its_wall_time_and_the_next_one_adds_to_it(
         stopped["wall_time_s_total"] + done["wall_time_s_now"]
     )
     assert done["commands"] == stopped["commands"] and len(done["commands"]) == 1
+
+
+def test_a_run_command_stopped_on_request_finishes_its_run_and_exits_75(tmp_path, monkeypatch):
+    """`touch OUT_DIR/STOP` during a command's second run: that run finishes and writes its
+    file, no other starts, study.json says finished: false, the request file is removed and
+    the status is 75 (sysexits' EX_TEMPFAIL); a stale request at a command's start is
+    removed, and the same command then runs the rest."""
+    from sixaxis_avoid.benchmark import runner
+
+    out = tmp_path / "bfs"
+    argv = ["run", "--suite", "quick", "--learners", "bfs", "--seeds", "2", "--no-ray"]
+    argv += ["--no-progress", "--out-dir", str(out)]
+    real, calls = runner.execute_run, []
+
+    def asking(spec):
+        calls.append(spec)
+        if len(calls) == 2:
+            (out / runner.STOP_FILE).touch()
+        return real(spec)
+
+    monkeypatch.setattr(runner, "execute_run", asking)
+    assert cli.main(argv) == runner.EXIT_STOPPED == 75
+    stopped = json.loads((out / "study.json").read_text())
+    assert stopped["finished"] is False and stopped["ran_now"] == 2 and len(calls) == 2
+    assert len(list((out / "runs").glob("*.json"))) == 2
+    assert not (out / runner.STOP_FILE).exists()
+
+    (out / runner.STOP_FILE).touch()  # left over: not a request to this command
+    assert cli.main(argv) == 0
+    done = json.loads((out / "study.json").read_text())
+    assert done["finished"] is True and done["skipped_now"] == 2
+    assert done["ran_now"] == done["runs"] - 2 and not (out / runner.STOP_FILE).exists()

@@ -269,7 +269,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
         jax_cpus=args.jax_cpus,
         on_progress=lambda so_far: write_manifest(so_far, False),
     )
-    write_manifest(res, True)
+    write_manifest(res, not res["stopped"])
     print(
         f"{res['ran']} ran, {res['skipped']} already done, {len(res['failures'])} failed, "
         f"{res['wall_time_s']:.1f} s",
@@ -277,7 +277,13 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     )
     for key, err in res["failures"]:
         print(f"FAILED {key}: {err}", file=sys.stderr)
-    return 1 if res["failures"] else 0
+    if res["failures"]:
+        return 1
+    if res["stopped"]:
+        left = res["runs"] - res["skipped"] - res["ran"]
+        print(f"stopped on request: {left} runs left; the same command runs them", file=sys.stderr)
+        return runner.EXIT_STOPPED
+    return 0
 
 
 def cmd_list(args: argparse.Namespace) -> int:

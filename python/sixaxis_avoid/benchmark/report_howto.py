@@ -47,18 +47,19 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         f"v2.json --address HEAD:6379 --no-progress --out-dir {a['results_dir']}",
         "```",
         "",
-        "Each SB3 or tabular run is a Ray task of one CPU; a JAX learner's seeds of one task "
-        "and budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 1). The "
-        "run files are written where the driver runs, and the same command run again skips "
-        "the runs already there; a command that was stopped left its wall time up to its "
-        "last finished run in the directory's `study.json` (rewritten after each run), and "
-        "the next one adds its own. A JAX search (`python -m sixaxis_avoid.benchmark.jax_tune`) "
-        "takes `--address` too: each compiled group (a tuning task and a draw of the static "
-        "knobs, 10 for this suite) is a Ray task of `--group-cpus` CPUs. It resumes from "
-        "the groups it saved (`--parts`), so on one machine it can span sessions. It comes "
-        "before a budget's runs: a run at a budget with no tuned entry uses the learner's "
-        "defaults and is marked untuned (and an SB3 learner that borrows its JAX twin's "
-        "values needs them borrowed first, `python -m sixaxis_avoid.benchmark.borrow`).",
+        "Each SB3 or tabular run is a Ray task of one CPU; a JAX learner's seeds of one task and "
+        "budget train in one vmapped call, one task of `--jax-cpus` CPUs (default 1). The run "
+        "files are written where the driver runs, and the same command run again skips the runs "
+        "already there; `touch OUT_DIR/STOP` stops a command without losing work (it hands out no"
+        " more runs, its running runs finish, exit status 75). A command that was stopped left "
+        "its wall time up to its last finished run in the directory's `study.json` (rewritten "
+        "after each run), and the next one adds its own. A JAX search (`python -m "
+        "sixaxis_avoid.benchmark.jax_tune`) takes `--address` too: each compiled group (a tuning "
+        "task and a draw of the static knobs, 10 for this suite) is a Ray task of `--group-cpus` "
+        "CPUs. It resumes from the groups it saved (`--parts`), so on one machine it can span "
+        "sessions. It comes before a budget's runs: a run at a budget with no tuned entry uses "
+        "the learner's defaults and is marked untuned (and an SB3 learner that borrows its JAX "
+        "twin's values needs them borrowed first, `python -m sixaxis_avoid.benchmark.borrow`).",
         "",
         "SB3's PPO and DQN can also be tuned by a search of their own at a budget, with the "
         "JAX search's effort (its space and sampler, `--trials` draws x `--seeds` seeds on "

@@ -5,6 +5,9 @@
 - :func:`run_study` runs the unfinished ones on Ray (a local Ray on all cores by default, or
   the cluster at ``address``), writes each result file atomically as it arrives, skips runs
   whose file already holds a result for the same spec, and counts runs on a progress bar.
+  A file named :data:`STOP_FILE` in the output directory asks it to stop: it hands out no
+  more runs, lets the running ones finish and write their files, and returns
+  ``stopped: True``.
 """
 
 from __future__ import annotations
@@ -424,6 +427,31 @@ def seed_major(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return sorted(specs, key=lambda s: rank[s["seed"]])
 
 
+#: The file in a study's output directory that asks a running :func:`run_study` to stop
+#: once its running runs have finished (``touch OUT_DIR/STOP``); it is removed when the
+#: study stops on it, and a stale one is removed, with a message, when a study starts.
+STOP_FILE = "STOP"
+
+#: The exit status of a command that stopped on :data:`STOP_FILE` with runs left
+#: (sysexits' EX_TEMPFAIL: the same command resumes them).
+EXIT_STOPPED = 75
+
+#: How often (s) a study waiting on its runs looks for :data:`STOP_FILE`.
+STOP_POLL_S = 1.0
+
+
+def stop_requested(out_dir: Path) -> bool:
+    """Whether ``out_dir`` holds :data:`STOP_FILE`."""
+    return (Path(out_dir) / STOP_FILE).exists()
+
+
+def cluster_cpus() -> int:
+    """The CPUs of the connected Ray cluster's live nodes (at least 1)."""
+    import ray
+
+    return max(1, int(ray.cluster_resources().get("CPU", 1)))
+
+
 def run_study(
     specs: list[dict[str, Any]],
     out_dir: Path,
@@ -438,8 +466,15 @@ def run_study(
 ) -> dict[str, Any]:
     """Run the specs whose result file is missing, seed by seed (:func:`seed_major`);
     returns counts and failures (``runs``, ``skipped``, ``ran``, ``failures``,
-    ``wall_time_s``). ``on_result`` gets each record as its file is written; ``on_progress``
-    gets those counts so far after each finished or failed run.
+    ``wall_time_s``, ``stopped``). ``on_result`` gets each record as its file is written;
+    ``on_progress`` gets those counts so far after each finished or failed run.
+
+    On Ray the runs are handed out as CPUs free up (at most the cluster's CPUs reserved at a
+    time, re-read as nodes join or leave), so every run handed out is running. That is what
+    makes a stop request (:data:`STOP_FILE` in ``out_dir``) lose no work: no run is handed
+    out after it, the running ones finish and write their files, and the study returns
+    ``stopped: True`` with the rest not run; the same call later runs only the rest. An
+    interrupt (Ctrl-C) stops at once instead: the running runs are lost.
 
     A JAX learner's runs of one task and budget train together, their seeds vmapped in one
     call (``run_group`` of its class): on Ray each such group is one task that reserves
@@ -447,12 +482,16 @@ def run_study(
     one CPU each trained more per hour than one group on two: docs/PERFORMANCE.md), beside
     the other learners' runs, one CPU each."""
     out_dir = Path(out_dir)
+    if stop_requested(out_dir):
+        (out_dir / STOP_FILE).unlink()
+        print(f"{out_dir}: removed a stop request left by an earlier command", file=sys.stderr)
     todo = [s for s in seed_major(specs) if not finished(out_dir, s)]
     skipped = len(specs) - len(todo)
     bar = _progress(len(specs), skipped, progress)
     failures: list[tuple[str, str]] = []
     t0 = time.perf_counter()
     ran = 0
+    stopped = False
 
     def counts() -> dict[str, Any]:
         return {
@@ -461,7 +500,15 @@ def run_study(
             "ran": ran,
             "failures": list(failures),
             "wall_time_s": time.perf_counter() - t0,
+            "stopped": stopped,
         }
+
+    def stop_now() -> bool:
+        nonlocal stopped
+        if not stopped and stop_requested(out_dir):
+            stopped = True
+            print(f"{out_dir}: stop requested; the running runs finish", file=sys.stderr)
+        return stopped
 
     def done(record: dict[str, Any]) -> None:
         nonlocal ran
@@ -480,9 +527,13 @@ def run_study(
     rest = [s for s in todo if s.get("family") != "jax"]
     if not use_ray:
         for group in groups:
+            if stop_now():
+                break
             for record in run_jax_group(group):
                 done(record)
         for s in rest:
+            if stop_now():
+                break
             done(execute_run(s))
     elif groups or rest:
         import ray
@@ -493,11 +544,25 @@ def run_study(
             per_group = min(jax_cpus, max_node_cpus())
             remote_group = ray.remote(num_cpus=per_group, max_retries=0)(run_jax_group)
             # The long JAX groups first, then the single runs fill the CPUs they leave.
-            pending = {remote_group.remote(g): g for g in groups}
-            pending.update({remote.remote(s): [s] for s in rest})
-            while pending:
-                ready, _ = ray.wait(list(pending), num_returns=1)
-                batch = pending.pop(ready[0])
+            # Each entry: (its task's launcher, its runs, the CPUs it reserves).
+            queue = [(lambda g=g: remote_group.remote(g), g, per_group) for g in groups]
+            queue += [(lambda s=s: remote.remote(s), [s], 1) for s in rest]
+            queue.reverse()  # popped from the end
+            pending: dict[Any, tuple[list[dict[str, Any]], int]] = {}
+            while queue or pending:
+                if queue and not stop_now():
+                    room = cluster_cpus() - sum(c for _, c in pending.values())
+                    # A task wider than the room still goes when nothing else runs.
+                    while queue and (queue[-1][2] <= room or not pending):
+                        launch, batch, cpus = queue.pop()
+                        pending[launch()] = (batch, cpus)
+                        room -= cpus
+                if not pending:
+                    break
+                ready, _ = ray.wait(list(pending), num_returns=1, timeout=STOP_POLL_S)
+                if not ready:
+                    continue
+                batch, _ = pending.pop(ready[0])
                 try:
                     out = ray.get(ready[0])
                 except ray.exceptions.RayError as e:
@@ -512,6 +577,8 @@ def run_study(
         finally:
             if started:
                 ray.shutdown()
+    if stopped:
+        (out_dir / STOP_FILE).unlink(missing_ok=True)
     bar.close()
     return counts()
 

@@ -111,7 +111,8 @@ def tune(
     """Run the candidates' runs (``specs``, from :func:`plan`; those not in ``log_dir`` yet)
     and score the candidates."""
     # The search's wall time over all the calls that ran it, each counted to its last
-    # finished run (a stopped call's unfinished runs are lost, and so is their time).
+    # finished run (an interrupted call's unfinished runs are lost, and so is their time; a
+    # call stopped on request, runner.STOP_FILE in log_dir, loses none).
     state = Path(log_dir) / "wall.json"
     before = json.loads(state.read_text())["wall_time_s"] if state.exists() else 0.0
     t0 = time.perf_counter()
@@ -127,6 +128,11 @@ def tune(
     if res["failures"]:
         key, err = res["failures"][0]
         raise SystemExit(f"sb3_tune: {len(res['failures'])} runs failed, e.g. {key}: {err}")
+    if res["stopped"]:
+        left = res["runs"] - res["skipped"] - res["ran"]
+        print(f"sb3_tune: stopped on request, {left} runs left in {log_dir}; the same "
+              "command runs them", file=sys.stderr)  # fmt: skip
+        raise SystemExit(runner.EXIT_STOPPED)
     trials = []
     cpu = 0.0
     for number, c in enumerate(cands):

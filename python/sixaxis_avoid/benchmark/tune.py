@@ -85,6 +85,10 @@ def cmd_tune(args: argparse.Namespace, argv: list[str]) -> int:
                     use_ray=not args.no_ray,
                     progress=not args.no_progress,
                 )
+                if res["stopped"]:
+                    print(f"[tune] {learner}: stopped on request; the same command resumes "
+                          "(the runs already in the log are kept)", file=sys.stderr)  # fmt: skip
+                    raise SystemExit(runner.EXIT_STOPPED)
                 failed = {k for k, _ in res["failures"]}
                 for trial in batch:
                     ss = specs[trial.number]
