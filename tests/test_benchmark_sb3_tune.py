@@ -94,3 +94,44 @@ def test_a_budget_off_the_axis_and_an_unknown_implementation_are_refused(setup, 
     with pytest.raises(SystemExit, match=r"--implementation: 'mine' is not one of rejax, sb3"):
         sb3_tune.main([*argv, "--budget", "400", "--implementation", "mine"])
     assert not (tmp_path / "t.json").exists()
+
+
+def test_a_search_stopped_on_request_is_a_set_in_progress_on_the_page(setup, tmp_path, monkeypatch):
+    """With its log directory under a study's ``-pending`` directory, a search stopped on
+    request (``STOP`` in the log directory, during its first run) exits 75 with that run
+    kept, and its manifest names it on the page as SB3's own search in progress; the same
+    command ends it (finished: true, the calls' wall times added)."""
+    from sixaxis_avoid.benchmark.report_pending import in_progress_sentence, sets_in_progress
+
+    learner, suite_path, hp = setup
+    log_dir = tmp_path / "study-pending" / f"sb3_tune-{learner}-400"
+    argv = ["--learner", learner, "--suite", str(suite_path), "--budget", "400", "--trials", "1",
+            "--seeds", "1", "--hyperparams", str(hp), "--out", str(tmp_path / "t.json"),
+            "--log-dir", str(log_dir), "--no-ray"]  # fmt: skip
+    real = runner.execute_run
+
+    def asking(spec):
+        log_dir.mkdir(parents=True, exist_ok=True)
+        (log_dir / runner.STOP_FILE).touch()
+        return real(spec)
+
+    monkeypatch.setattr(runner, "execute_run", asking)
+    with pytest.raises(SystemExit) as stop:
+        sb3_tune.main(argv)
+    assert stop.value.code == runner.EXIT_STOPPED and not (tmp_path / "t.json").exists()
+    man = json.loads((log_dir / "study.json").read_text())
+    assert (man["kind"], man["finished"], man["ran_now"], man["runs"]) == ("sb3_tune", False, 1, 2)
+    assert man["command"].startswith("python -m sixaxis_avoid.benchmark.sb3_tune --learner")
+    (p,) = sets_in_progress(tmp_path / "study")
+    assert (p["made"], p["of"], p["budgets"], p["finished"]) == (1, 2, [400], False)
+    assert (
+        f"SB3's own search for {learner} at 400 (2 candidates x 1 seeds x 1 tuning tasks), "
+        f"1 of 2 runs in `{log_dir}`" in in_progress_sentence([p])
+    )
+
+    monkeypatch.setattr(runner, "execute_run", real)
+    a = sb3_tune.main(argv)
+    done = json.loads((log_dir / "study.json").read_text())
+    assert done["finished"] is True and (done["skipped_now"], done["ran_now"]) == (1, 1)
+    assert a["wall_time_s"] == pytest.approx(done["wall_time_s_total"])
+    assert done["wall_time_s_total"] > man["wall_time_s_total"]

@@ -67,8 +67,10 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "candidate: `python -m sixaxis_avoid.benchmark.sb3_tune --learner ppo --suite "
         f"{suite} --budget 300000 --trials 32 --seeds 3 --out docs/results/v2-tuning/"
         "ppo-300000.json --record` (`--address` for a cluster). Its runs are benchmark runs "
-        "without re-plans, kept beside the trials file, so a stopped search resumes; "
-        "`--record` puts the best values in place of the borrowed ones, and that budget's "
-        "SB3 runs then run again on them.",
+        "without re-plans, kept beside the trials file (or in `--log-dir`), so a stopped "
+        "search resumes; a log directory under `docs/results/v2-pending` is named in the "
+        "headline as a set in progress until the search ends; `--record` puts the best "
+        "values in place of the borrowed ones, and that budget's SB3 runs then run again on "
+        "them.",
         "",
     ]

@@ -1,7 +1,8 @@
 """Run sets in progress beside a study: ``<results>-pending/<dir>``, each one `run` command
-too long for one sitting, committed part way so that the same command resumes it on another
-day or machine (docs/results/v2-pending/README.md). No figure reads them; the v2 page names
-them in its headline.
+(or one ``sb3_tune`` search, its log directory) too long for one sitting, committed part way
+so that the same command resumes it on another day or machine
+(docs/results/v2-pending/README.md). No figure reads them; the v2 page names them in its
+headline.
 
 Entry points: :func:`sets_in_progress` (each set's learners, budgets, runs made of its
 command's, wall time so far) and :func:`in_progress_sentence` (the page's line).
@@ -38,9 +39,28 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
                 "finished": bool(man.get("finished", True)),
                 "wall_time_s_total": float(man.get("wall_time_s_total", 0.0)),
                 "command": man["command"],
+                # "sb3_tune": SB3's own search (its log directory's manifest); else runs.
+                "kind": man.get("kind", "run"),
+                "candidates": man.get("candidates"),
+                "seeds": man.get("seeds", []),
+                "tasks": man.get("tasks", []),
             }
         )
     return out
+
+
+def _describe(p: dict[str, Any]) -> str:
+    budgets = ", ".join(fmt_steps(b) for b in p["budgets"]) or "—"
+    what = f"{', '.join(p['learners'])} at {budgets}"
+    if p["kind"] == "sb3_tune":
+        what = (
+            f"SB3's own search for {what} ({p['candidates']} candidates x {len(p['seeds'])} "
+            f"seeds x {len(p['tasks'])} tuning tasks)"
+        )
+    return (
+        f"{what}, {p['made']} of {p['of']} runs in `{p['dir']}` "
+        f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
+    )
 
 
 def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
@@ -50,11 +70,6 @@ def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
     return (
         " In progress, committed part way beside the study and not in any figure until "
         "complete (the same command, in each directory's `study.json`, runs the rest): "
-        + "; ".join(
-            f"{', '.join(p['learners'])} at {', '.join(fmt_steps(b) for b in p['budgets']) or '—'}"
-            f", {p['made']} of {p['of']} runs in `{p['dir']}` "
-            f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
-            for p in pending
-        )
+        + "; ".join(_describe(p) for p in pending)
         + "."
     )

@@ -18,7 +18,10 @@ borrow`); this search gives SB3 the same tuning effort on its own:
   (``max_replans`` 0: the score is the learned path's, and a re-plan would train again).
   They run on Ray (one CPU each; ``--address`` joins a cluster, ``--no-ray`` runs them here)
   and each lands in ``--log-dir`` as it finishes, so a stopped search resumes on the same
-  command.
+  command (``touch LOG_DIR/STOP`` stops it once its running runs finish, exit status 75).
+  ``LOG_DIR/study.json`` is its manifest (``kind: "sb3_tune"``, runs made, wall time over
+  every call, ``finished``): a log directory under ``docs/results/v2-pending`` is named on
+  the page as a set in progress.
 - The objective is the reported metric: the mean final SPL over the tuning tasks and seeds.
   Every trial goes to ``--out`` in ``jax_tune``'s layout (values, per-task per-seed final
   scores and curves, objective); with ``--record``, the best one's values go into the
@@ -34,7 +37,6 @@ import json
 import os
 import shlex
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -107,24 +109,46 @@ def tune(
     use_ray: bool = True,
     address: str | None = None,
     num_cpus: int | None = None,
+    about: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Run the candidates' runs (``specs``, from :func:`plan`; those not in ``log_dir`` yet)
-    and score the candidates."""
+    and score the candidates.
+
+    ``log_dir/study.json`` is the search's manifest in `run`'s form (``about``'s fields, such
+    as ``command`` and ``learners``, plus ``kind: "sb3_tune"``, the run counts, the wall time
+    over all the calls that ran it, ``finished``), rewritten after each run, so a search
+    committed part way under a study's ``-pending`` directory is named on the page as a set
+    in progress (:mod:`~sixaxis_avoid.benchmark.report_pending`)."""
     # The search's wall time over all the calls that ran it, each counted to its last
     # finished run (an interrupted call's unfinished runs are lost, and so is their time; a
     # call stopped on request, runner.STOP_FILE in log_dir, loses none).
-    state = Path(log_dir) / "wall.json"
-    before = json.loads(state.read_text())["wall_time_s"] if state.exists() else 0.0
-    t0 = time.perf_counter()
+    state = Path(log_dir) / "study.json"
+    before = json.loads(state.read_text())["wall_time_s_total"] if state.exists() else 0.0
 
-    def clock(_: dict[str, Any]) -> None:
-        atomic_write_text(state, json.dumps({"wall_time_s": before + time.perf_counter() - t0}))
+    def manifest(res: dict[str, Any], finished: bool) -> None:
+        runner.write_manifest(
+            log_dir,
+            {
+                **(about or {}),
+                "kind": "sb3_tune",
+                "candidates": len(cands),
+                "runs": res["runs"],
+                "ran_now": res["ran"],
+                "skipped_now": res["skipped"],
+                "wall_time_s_now": res["wall_time_s"],
+                "wall_time_s_total": before + res["wall_time_s"],
+                "failures": res["failures"],
+                "finished": finished,
+            },
+        )
 
     res = runner.run_study(
         [s for ss in specs.values() for s in ss], log_dir, address=address,
-        num_cpus=num_cpus, use_ray=use_ray, progress=False, on_result=clock,
+        num_cpus=num_cpus, use_ray=use_ray, progress=False,
+        on_progress=lambda so_far: manifest(so_far, False),
     )  # fmt: skip
-    wall = before + time.perf_counter() - t0
+    manifest(res, not res["stopped"] and not res["failures"])
+    wall = before + res["wall_time_s"]
     if res["failures"]:
         key, err = res["failures"][0]
         raise SystemExit(f"sb3_tune: {len(res['failures'])} runs failed, e.g. {key}: {err}")
@@ -218,17 +242,32 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     if not suite.tuning_tasks:
         raise SystemExit(f"suite {suite.name!r}: tuning.tasks is empty")
     specs = plan(suite, a.learner, cands, seeds, a.budget, a.hyperparams)
+    argv_s = argv if argv is not None else sys.argv[1:]
+    command = "python -m sixaxis_avoid.benchmark.sb3_tune " + shlex.join(argv_s)
+    about = {
+        "command": command,
+        "learners": [a.learner],
+        "budget": a.budget,
+        "suite": suite.name,
+        "tasks": [t.id for t in suite.tuning_tasks],
+        "seeds": seeds,
+        "ray": "in-process" if a.no_ray else (a.address or "local"),
+    }
     try:
         result = tune(
-            cands, specs, log_dir, use_ray=not a.no_ray, address=a.address, num_cpus=a.num_cpus
+            cands,
+            specs,
+            log_dir,
+            use_ray=not a.no_ray,
+            address=a.address,
+            num_cpus=a.num_cpus,
+            about=about,
         )
     finally:
         if started:
             import ray
 
             ray.shutdown()
-    argv_s = argv if argv is not None else sys.argv[1:]
-    command = "python -m sixaxis_avoid.benchmark.sb3_tune " + shlex.join(argv_s)
     out = {
         "learner": a.learner,
         "suite": suite.name,
