@@ -70,7 +70,9 @@ def test_the_search_scores_draws_and_twin_resumes_and_records(setup, tmp_path):
             assert r["spec"]["max_replans"] == 0 and r["spec"]["budget"] == 400
             assert r["result"]["algorithm2"]["replans"] == 0
         assert t["curves"]["tune-gen-medium-1000"]["env_steps"][-1] <= 400
-    best = max(a["trials"], key=lambda t: (t["objective"], -t["number"]))
+    top = max(t["objective"] for t in a["trials"])
+    tied = [t for t in a["trials"] if t["objective"] == top]
+    best = next((t for t in tied if t["name"] == "twin"), tied[0])
     assert a["best_trial"] == best["number"] and a["wall_time_s"] > 0 and a["cpu_time_s"] > 0
 
     # Stopped midway (a run lost): the same command runs that one only, with the same trials.
@@ -135,3 +137,19 @@ def test_a_search_stopped_on_request_is_a_set_in_progress_on_the_page(setup, tmp
     assert done["finished"] is True and (done["skipped_now"], done["ran_now"]) == (1, 1)
     assert a["wall_time_s"] == pytest.approx(done["wall_time_s_total"])
     assert done["wall_time_s_total"] > man["wall_time_s_total"]
+
+
+def test_the_best_trial_keeps_the_twins_values_unless_a_draw_scores_strictly_higher():
+    """Outcomes near 0 or 1 make ties at the top common: a tie keeps the borrowed values
+    (the twin's, which the study's runs already use); among draws alone, the first wins."""
+
+    def trials(*scores):
+        names = [f"trial{k}" for k in range(len(scores) - 1)] + ["twin"]
+        return [{"number": k, "name": n, "objective": o}
+                for k, (n, o) in enumerate(zip(names, scores))]  # fmt: skip
+
+    assert sb3_tune.best_trial(trials(1.0, 0.4, 1.0))["name"] == "twin"
+    assert sb3_tune.best_trial(trials(0.9, 1.0, 0.95))["name"] == "trial1"
+    assert sb3_tune.best_trial(trials(1.0, 1.0, 0.95))["name"] == "trial0"
+    no_twin = [t for t in trials(0.5, 0.7, 0.7, 0.1) if t["name"] != "twin"]
+    assert sb3_tune.best_trial(no_twin)["name"] == "trial1"

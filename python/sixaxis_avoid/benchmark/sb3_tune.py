@@ -11,7 +11,8 @@ borrow`); this search gives SB3 the same tuning effort on its own:
   compiles nothing, so nothing ties the trials to a few groups), with ``--implementation``
   fixed for every one (default ``"sb3"``: SB3's own algorithm), plus the twin's values as
   they are borrowed (``implementation: rejax``) as one more, labelled candidate when the
-  hyperparameter file has them, so the search can only confirm or improve on them.
+  hyperparameter file has them, so the search can only confirm or improve on them (a draw
+  replaces them only if it scores strictly higher: :func:`best_trial`).
 - Each candidate runs ``--seeds`` seeds (the suite's tuning seeds first, then consecutive
   ones, as ``jax_tune``) on every tuning task for the budget: ordinary benchmark runs
   (:func:`runner.plan_runs` at that budget, tagged by trial) without Algorithm 2's re-plans
@@ -185,7 +186,7 @@ def tune(
                 },
             }
         )
-    best = max(trials, key=lambda tr: (tr["objective"], -tr["number"]))
+    best = best_trial(trials)
     return {
         "trials": trials,
         "best_trial": best["number"],
@@ -195,6 +196,16 @@ def tune(
         "wall_time_s": wall,
         "cpu_time_s": cpu,  # the runs' training CPU time (evaluation excluded)
     }
+
+
+def best_trial(trials: list[dict[str, Any]]) -> dict[str, Any]:
+    """The trial with the highest objective; on a tie the twin's (the values the study's
+    SB3 runs already use: a draw replaces them only if it scores strictly higher), else the
+    lowest-numbered one. Outcomes near 0 or 1 make ties at the top common."""
+    top = max(tr["objective"] for tr in trials)
+    tied = [tr for tr in trials if tr["objective"] == top]
+    twin = [tr for tr in tied if tr["name"] == TWIN_CANDIDATE]
+    return twin[0] if twin else min(tied, key=lambda tr: tr["number"])
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
