@@ -738,6 +738,27 @@ def test_dqn_squared_loss_is_half_the_squared_td_error_where_sb3s_is_huber():
     assert worst > 1 and huber < want  # the rewards scaled by 1e-4 still give TD errors > 1
 
 
+def bfs_run_command(tmp_path, monkeypatch, at_call, act):
+    """A `run` command of the quick suite's bfs runs (2 seeds, in-process) into
+    ``tmp_path/bfs``, with ``act(out_dir)`` called as its run number ``at_call`` starts:
+    ``(out_dir, argv, the specs run so far, the real execute_run)``."""
+    from sixaxis_avoid.benchmark import runner
+
+    out = tmp_path / "bfs"
+    argv = ["run", "--suite", "quick", "--learners", "bfs", "--seeds", "2", "--no-ray"]
+    argv += ["--no-progress", "--out-dir", str(out)]
+    real, calls = runner.execute_run, []
+
+    def hooked(spec):
+        calls.append(spec)
+        if len(calls) == at_call:
+            act(out)
+        return real(spec)
+
+    monkeypatch.setattr(runner, "execute_run", hooked)
+    return out, argv, calls, real
+
+
 def test_a_stopped_run_command_keeps_its_wall_time_and_the_next_one_adds_to_it(
     tmp_path, monkeypatch
 ):
@@ -747,18 +768,10 @@ def test_a_stopped_run_command_keeps_its_wall_time_and_the_next_one_adds_to_it(
     with finished: true."""
     from sixaxis_avoid.benchmark import runner
 
-    out = tmp_path / "bfs"
-    argv = ["run", "--suite", "quick", "--learners", "bfs", "--seeds", "2", "--no-ray"]
-    argv += ["--no-progress", "--out-dir", str(out)]
-    real, calls = runner.execute_run, []
+    def interrupt(_out):
+        raise KeyboardInterrupt
 
-    def stopping(spec):
-        calls.append(spec)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(spec)
-
-    monkeypatch.setattr(runner, "execute_run", stopping)
+    out, argv, _, real = bfs_run_command(tmp_path, monkeypatch, 3, interrupt)
     with pytest.raises(KeyboardInterrupt):
         cli.main(argv)
     stopped = json.loads((out / "study.json").read_text())
@@ -785,18 +798,10 @@ def test_a_run_command_stopped_on_request_finishes_its_run_and_exits_75(tmp_path
     removed, and the same command then runs the rest."""
     from sixaxis_avoid.benchmark import runner
 
-    out = tmp_path / "bfs"
-    argv = ["run", "--suite", "quick", "--learners", "bfs", "--seeds", "2", "--no-ray"]
-    argv += ["--no-progress", "--out-dir", str(out)]
-    real, calls = runner.execute_run, []
+    def ask_to_stop(out):
+        (out / runner.STOP_FILE).touch()
 
-    def asking(spec):
-        calls.append(spec)
-        if len(calls) == 2:
-            (out / runner.STOP_FILE).touch()
-        return real(spec)
-
-    monkeypatch.setattr(runner, "execute_run", asking)
+    out, argv, calls, _ = bfs_run_command(tmp_path, monkeypatch, 2, ask_to_stop)
     assert cli.main(argv) == runner.EXIT_STOPPED == 75
     stopped = json.loads((out / "study.json").read_text())
     assert stopped["finished"] is False and stopped["ran_now"] == 2 and len(calls) == 2
