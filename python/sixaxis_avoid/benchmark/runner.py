@@ -429,7 +429,7 @@ def seed_major(specs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 #: The file in a study's output directory that asks a running :func:`run_study` to stop
 #: once its running runs have finished (``touch OUT_DIR/STOP``); it is removed when the
-#: study stops on it, and a stale one is removed, with a message, when a study starts.
+#: study returns, and a stale one is removed, with a message, when a study starts.
 STOP_FILE = "STOP"
 
 #: The exit status of a command that stopped on :data:`STOP_FILE` with runs left
@@ -577,8 +577,9 @@ def run_study(
         finally:
             if started:
                 ray.shutdown()
-    if stopped:
-        (out_dir / STOP_FILE).unlink(missing_ok=True)
+    # The request is answered (or came after every run was handed out): never left behind,
+    # where it could be committed with the study's files.
+    (out_dir / STOP_FILE).unlink(missing_ok=True)
     bar.close()
     return counts()
 
