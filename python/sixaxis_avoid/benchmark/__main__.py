@@ -245,13 +245,8 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
                 "learners": union(previous.get("learners", []), learners),
                 "tasks": union(previous.get("tasks", []), [t.id for t in (tasks or suite.tasks)]),
                 "seeds": sorted(set(previous.get("seeds", [])) | {s["seed"] for s in specs}),
-                "runs": res["runs"],
-                "ran_now": res["ran"],
-                "skipped_now": res["skipped"],
-                "wall_time_s_now": res["wall_time_s"],
-                "wall_time_s_total": previous.get("wall_time_s_total", 0.0) + res["wall_time_s"],
+                **runner.manifest_counts(res, previous.get("wall_time_s_total", 0.0)),
                 "ray": "in-process" if args.no_ray else (args.address or "local"),
-                "failures": res["failures"],
                 "finished": finished,
             },
         )
@@ -280,7 +275,7 @@ def cmd_run(args: argparse.Namespace, argv: list[str]) -> int:
     if res["failures"]:
         return 1
     if res["stopped"]:
-        left = res["runs"] - res["skipped"] - res["ran"]
+        left = runner.runs_left(res)
         print(f"stopped on request: {left} runs left; the same command runs them", file=sys.stderr)
         return runner.EXIT_STOPPED
     return 0

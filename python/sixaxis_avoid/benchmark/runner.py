@@ -452,6 +452,25 @@ def cluster_cpus() -> int:
     return max(1, int(ray.cluster_resources().get("CPU", 1)))
 
 
+def manifest_counts(res: dict[str, Any], wall_time_s_before: float) -> dict[str, Any]:
+    """A study manifest's counts from :func:`run_study`'s counts ``res`` (so far or final),
+    with the wall time of the earlier calls into the same directory added: what `run`'s
+    ``study.json`` and ``sb3_tune``'s log manifest both hold."""
+    return {
+        "runs": res["runs"],
+        "ran_now": res["ran"],
+        "skipped_now": res["skipped"],
+        "wall_time_s_now": res["wall_time_s"],
+        "wall_time_s_total": wall_time_s_before + res["wall_time_s"],
+        "failures": res["failures"],
+    }
+
+
+def runs_left(res: dict[str, Any]) -> int:
+    """The runs :func:`run_study` did not make (stopped, or failed)."""
+    return res["runs"] - res["skipped"] - res["ran"]
+
+
 def run_study(
     specs: list[dict[str, Any]],
     out_dir: Path,

@@ -133,12 +133,7 @@ def tune(
                 **(about or {}),
                 "kind": "sb3_tune",
                 "candidates": len(cands),
-                "runs": res["runs"],
-                "ran_now": res["ran"],
-                "skipped_now": res["skipped"],
-                "wall_time_s_now": res["wall_time_s"],
-                "wall_time_s_total": before + res["wall_time_s"],
-                "failures": res["failures"],
+                **runner.manifest_counts(res, before),
                 "finished": finished,
             },
         )
@@ -154,7 +149,7 @@ def tune(
         key, err = res["failures"][0]
         raise SystemExit(f"sb3_tune: {len(res['failures'])} runs failed, e.g. {key}: {err}")
     if res["stopped"]:
-        left = res["runs"] - res["skipped"] - res["ran"]
+        left = runner.runs_left(res)
         print(f"sb3_tune: stopped on request, {left} runs left in {log_dir}; the same "
               "command runs them", file=sys.stderr)  # fmt: skip
         raise SystemExit(runner.EXIT_STOPPED)
