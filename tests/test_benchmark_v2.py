@@ -545,3 +545,16 @@ def test_twin_agreement_compares_each_jax_learner_with_its_sb3_twin():
     r = twin_agreement(a, reps=500)[0]
     assert r["overlap"] and r["parting"] == [] and r["diff_ci"][0] < 0 < r["diff_ci"][1]
     assert twin_rows([]) == []
+
+
+def test_the_implementation_line_names_each_implementation_with_its_own_note():
+    """SB3 PPO on rejax's implementation (borrowed values) and on SB3's own (its own
+    search's values) are told apart: each gets its own note, a learner without notes none."""
+    from sixaxis_avoid.benchmark.report_v2 import IMPLEMENTATION_NOTES, implementation_line
+
+    line = implementation_line({"ppo": ["rejax", "sb3"], "beta": ["rejax"]})
+    assert line.startswith("**Implementation**: ppo runs with `implementation: rejax` (")
+    assert f"`implementation: rejax` ({IMPLEMENTATION_NOTES['ppo']['rejax']})" in line
+    assert f"`implementation: sb3` ({IMPLEMENTATION_NOTES['ppo']['sb3']})" in line
+    assert "SB3's own PPO" in IMPLEMENTATION_NOTES["ppo"]["sb3"]
+    assert line.endswith("; beta runs with `implementation: rejax`.")

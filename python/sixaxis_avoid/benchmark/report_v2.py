@@ -42,16 +42,41 @@ HEADLINE_SECTION = "benchmark-headline"
 
 #: What an SB3 learner's ``implementation: rejax`` is, for the headline's note
 #: (``learners.IMPLEMENTATIONS``).
+#: What each implementation of an SB3 learner is, for the headline's *Implementation* line
+#: (learner -> implementation -> note).
 IMPLEMENTATION_NOTES = {
-    "ppo": "`learners.PPO_IMPLEMENTATIONS`: SB3 PPO with rejax 0.1.3's initialisation, "
-    "gradient clipping per network, truncation as termination and value clipping, the "
-    "implementation jax_ppo's values were tuned on; with SB3's own they starve its actor: "
-    "*JAX against SB3*, the ablation",
-    "dqn": "`learners.DQN_IMPLEMENTATIONS`: SB3 DQN with rejax 0.1.3's squared TD-error "
-    "loss, initialisation, truncation as termination, train_freq envs stepped once between "
-    "update phases and plain replay (no HER) on the goal task, the implementation jax_dqn's "
-    "values were tuned on; with SB3's Huber loss they fail: *JAX against SB3*",
+    "ppo": {
+        "rejax": "`learners.PPO_IMPLEMENTATIONS`: SB3 PPO with rejax 0.1.3's initialisation, "
+        "gradient clipping per network, truncation as termination and value clipping, the "
+        "implementation jax_ppo's values were tuned on; with SB3's own they starve its actor: "
+        "*JAX against SB3*, the ablation",
+        "sb3": "SB3's own PPO, on the values SB3's own search chose at this budget "
+        "(`sb3_tune`, *Tuning record*)",
+    },
+    "dqn": {
+        "rejax": "`learners.DQN_IMPLEMENTATIONS`: SB3 DQN with rejax 0.1.3's squared TD-error "
+        "loss, initialisation, truncation as termination, train_freq envs stepped once "
+        "between update phases and plain replay (no HER) on the goal task, the implementation "
+        "jax_dqn's values were tuned on; with SB3's Huber loss they fail: *JAX against SB3*",
+        "sb3": "SB3's own DQN, on the values SB3's own search chose at this budget "
+        "(`sb3_tune`, *Tuning record*)",
+    },
 }
+
+
+def implementation_line(impl: dict[str, list[str]]) -> str:
+    """The headline's *Implementation* line: each learner's implementations at the headline
+    budget (learner -> sorted names), each with its note when it has one."""
+    return (
+        "**Implementation**: "
+        + "; ".join(
+            f"{lr} runs with `implementation: {x}`"
+            + (f" ({note})" if (note := IMPLEMENTATION_NOTES.get(lr, {}).get(x)) else "")
+            for lr, v in impl.items()
+            for x in v
+        )
+        + "."
+    )
 
 
 def fmt_wilson(w: dict[str, Any]) -> str:
@@ -549,16 +574,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
             if g.get("implementation")
         }
         if impl:
-            L += [
-                "**Implementation**: "
-                + "; ".join(
-                    f"{lr} runs with `implementation: {', '.join(v)}`"
-                    + (f" ({IMPLEMENTATION_NOTES[lr]})" if lr in IMPLEMENTATION_NOTES else "")
-                    for lr, v in impl.items()
-                )
-                + ".",
-                "",
-            ]
+            L += [implementation_line(impl), ""]
         if a["over_budget"]:
             L += [
                 "**Over budget**: these runs used more env steps than the budget they are "
