@@ -40,8 +40,6 @@ REPRODUCTION = ("q_paper",)
 HEADLINE_SECTION = "benchmark-headline"
 
 
-#: What an SB3 learner's ``implementation: rejax`` is, for the headline's note
-#: (``learners.IMPLEMENTATIONS``).
 #: What each implementation of an SB3 learner is, for the headline's *Implementation* line
 #: (learner -> implementation -> note).
 IMPLEMENTATION_NOTES = {
