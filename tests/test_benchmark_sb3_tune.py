@@ -130,6 +130,20 @@ def test_a_search_stopped_on_request_is_a_set_in_progress_on_the_page(setup, tmp
         f"SB3's own search for {learner} at 400 (2 candidates x 1 seeds x 1 tuning tasks), "
         f"1 of 2 runs in `{log_dir}`" in in_progress_sentence([p])
     )
+    # The study has none of its run files, so it is no re-run; once the study has one of
+    # the same name, the set is named as a re-run that replaces the study's runs there.
+    assert p["replaces"] == 0 and "again" not in in_progress_sentence([p])
+    (kept,) = (log_dir / "runs").glob("*.json")
+    (tmp_path / "study" / "runs").mkdir(parents=True)
+    (tmp_path / "study" / "runs" / kept.name).write_text(kept.read_text())
+    (p,) = sets_in_progress(tmp_path / "study")
+    assert p["replaces"] == 1 and "again" not in in_progress_sentence([p])  # a search's
+    p["kind"] = "run"  # a run set (benchmark run) with those files: a re-run
+    assert p["replaces"] == 1 and (
+        "at 400 again on its current hyperparameters (to replace the study's runs there)"
+        in in_progress_sentence([p])
+    )
+    (tmp_path / "study" / "runs" / kept.name).unlink()
 
     monkeypatch.setattr(runner, "execute_run", real)
     a = sb3_tune.main(argv)

@@ -44,6 +44,9 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
                 "candidates": man.get("candidates"),
                 "seeds": man.get("seeds", []),
                 "tasks": man.get("tasks", []),
+                # A re-run (new values at a budget): its run files replace the study's
+                # files of the same names once merged; how many the study has of them.
+                "replaces": sum((results / "runs" / f"{r['key']}.json").exists() for r in runs),
             }
         )
     return out
@@ -57,6 +60,8 @@ def _describe(p: dict[str, Any]) -> str:
             f"SB3's own search for {what} ({p['candidates']} candidates x {len(p['seeds'])} "
             f"seeds x {len(p['tasks'])} tuning tasks)"
         )
+    elif p.get("replaces"):
+        what = f"{what} again on its current hyperparameters (to replace the study's runs there)"
     return (
         f"{what}, {p['made']} of {p['of']} runs in `{p['dir']}` "
         f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
