@@ -14,7 +14,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from sixaxis_avoid.benchmark.runner import load_runs
+from sixaxis_avoid.benchmark.runner import load_runs, run_key
 from sixaxis_avoid.benchmark.stats import fmt_steps
 
 
@@ -46,7 +46,9 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
                 "tasks": man.get("tasks", []),
                 # A re-run (new values at a budget): its run files replace the study's
                 # files of the same names once merged; how many the study has of them.
-                "replaces": sum((results / "runs" / f"{r['key']}.json").exists() for r in runs),
+                "replaces": sum(
+                    (results / "runs" / f"{run_key(r['spec'])}.json").exists() for r in runs
+                ),
             }
         )
     return out
