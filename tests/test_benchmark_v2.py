@@ -558,3 +558,37 @@ def test_the_implementation_line_names_each_implementation_with_its_own_note():
     assert f"`implementation: sb3` ({IMPLEMENTATION_NOTES['ppo']['sb3']})" in line
     assert "SB3's own PPO" in IMPLEMENTATION_NOTES["ppo"]["sb3"]
     assert line.endswith("; beta runs with `implementation: rejax`.")
+
+
+def test_tuning_changes_name_the_budgets_where_a_learners_values_change():
+    """A plateau mark between two budgets whose runs came from different searches (SB3 PPO
+    on its own values at 300k, on jax_ppo's at 1M) is named; one source along the axis, or
+    a budget the learner did not run, is not."""
+    from sixaxis_avoid.benchmark.report_v2 import tuning_changes, tuning_changes_line
+
+    borrowed = ["jax_ppo's tuned values and rejax's implementation (not tuned for SB3)"]
+
+    def g(status, impl):
+        return {"status": status, "implementation": impl}
+
+    a = {
+        "learners": ["ppo", "jax_ppo", "dqn"],
+        "budgets": [100_000, 300_000, 1_000_000],
+        "per_budget": {
+            100_000: {"learners": {"ppo": g(borrowed, ["rejax"]), "jax_ppo": g(["tuned"], []),
+                                   "dqn": g(["tuned"], ["rejax"])}},
+            300_000: {"learners": {"ppo": g(["tuned"], ["sb3"]), "jax_ppo": g(["tuned"], []),
+                                   "dqn": g(["tuned"], ["rejax"])}},
+            1_000_000: {"learners": {"ppo": g(borrowed, ["rejax"]), "jax_ppo": g(["tuned"], [])}},
+        },
+    }  # fmt: skip
+    changes = tuning_changes(a)
+    assert [(c["learner"], c["budgets"]) for c in changes] == [
+        ("ppo", [100_000, 300_000]),
+        ("ppo", [300_000, 1_000_000]),
+    ]
+    line = tuning_changes_line(changes)
+    assert line.startswith("**Hyperparameters change along the axis**")
+    assert "ppo from 300k (tuned; implementation sb3) to 1.00M (jax_ppo's tuned values" in line
+    assert "jax_ppo from" not in line and "dqn" not in line
+    assert tuning_changes_line([]) == ""

@@ -77,6 +77,48 @@ def implementation_line(impl: dict[str, list[str]]) -> str:
     )
 
 
+def tuning_changes(a: dict[str, Any]) -> list[dict[str, Any]]:
+    """Adjacent budgets of the axis at which a learner's runs differ in where their
+    hyperparameters came from (``hyperparams_status``) or in their implementation: its
+    plateau mark between them then compares runs on different values, not only on more env
+    steps. One entry per learner and pair: ``learner``, ``budgets`` (the two, in env steps)
+    and ``setups`` (each budget's status and implementation, as sorted lists)."""
+    out = []
+    bs = a["budgets"]
+    for lr in a["learners"]:
+        for x, y in zip(bs, bs[1:]):
+            gx = a["per_budget"][x]["learners"].get(lr)
+            gy = a["per_budget"][y]["learners"].get(lr)
+            if gx is None or gy is None:
+                continue
+            sx = (gx["status"], gx.get("implementation", []))
+            sy = (gy["status"], gy.get("implementation", []))
+            if sx != sy:
+                out.append({"learner": lr, "budgets": [x, y], "setups": [sx, sy]})
+    return out
+
+
+def tuning_changes_line(changes: list[dict[str, Any]]) -> str:
+    """The *Score by budget* line naming :func:`tuning_changes` ('' when there are none)."""
+    if not changes:
+        return ""
+
+    def setup(st: tuple[list[str], list[str]]) -> str:
+        status, impl = st
+        return "; ".join(status) + (f"; implementation {', '.join(impl)}" if impl else "")
+
+    return (
+        "**Hyperparameters change along the axis** here, so these marks compare runs on "
+        "different values, not only on more env steps: "
+        + "; ".join(
+            f"{c['learner']} from {fmt_steps(c['budgets'][0])} ({setup(c['setups'][0])}) to "
+            f"{fmt_steps(c['budgets'][1])} ({setup(c['setups'][1])})"
+            for c in changes
+        )
+        + "."
+    )
+
+
 def fmt_wilson(w: dict[str, Any]) -> str:
     return f"{w['rate']:.3f} [{w['lo']:.3f}, {w['hi']:.3f}] ({w['successes']}/{w['trials']})"
 
@@ -610,6 +652,8 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                         mark = " ✓" if lo - 1e-12 <= nxt["mean"] <= hi + 1e-12 else " ✗"
                 cells.append(fmt_ci(v["mean"], v["mean_ci"]) + mark)
             L.append(f"| {lr} | " + " | ".join(cells) + " |")
+        if line := tuning_changes_line(tuning_changes(a)):
+            L += ["", line]
         L += [
             "",
             f"![Curves of every learner on one env-steps axis]({rel['curves']})",
