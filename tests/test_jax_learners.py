@@ -12,7 +12,15 @@ import numpy as np
 import pytest
 from _helpers import assert_same_trials
 from gymnasium.error import DependencyNotInstalled
-from sixaxis_avoid.benchmark import jax_learners, jax_runs, jax_tune, learners, report, runner
+from sixaxis_avoid.benchmark import (
+    jax_learners,
+    jax_runs,
+    jax_tune,
+    learners,
+    report,
+    report_pending,
+    runner,
+)
 from sixaxis_avoid.benchmark.tasks import load_suite
 
 TINY_DQN = {
@@ -259,13 +267,32 @@ def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypa
             raise KeyboardInterrupt
         return run(self, candidates, seeds)
 
+    # Its parts directory under a study's -pending directory: the page names it in progress.
     out, hp = tmp_path / "b" / "t.json", tmp_path / "b" / "hp.json"
+    pdir = tmp_path / "study-pending" / "jax_tune-ppo-512"
+    argv = [*argv, "--parts", str(pdir)]
     monkeypatch.setattr(jax_learners.Compiled, "run", stopping)
     with pytest.raises(KeyboardInterrupt):
         jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
-    parts = sorted((tmp_path / "b" / "t.json.parts").iterdir())
+    parts = sorted(pdir.glob("*--*.json"))
     assert [p.name.split("--")[0] for p in parts] == ["tune-gen-easy-1000"] * 2
     assert not out.exists() and not hp.exists()
+    man = json.loads((pdir / "study.json").read_text())
+    assert (man["kind"], man["learners"], man["budget"], man["runs"], man["finished"]) == (
+        "jax_tune",
+        ["jax_ppo"],
+        512,
+        4,
+        False,
+    )
+    assert man["command"].startswith("python -m sixaxis_avoid.benchmark.jax_tune --algo ppo")
+    assert man["wall_time_s_total"] > 0
+    (p,) = report_pending.sets_in_progress(tmp_path / "study")
+    assert (p["kind"], p["made"], p["of"], p["budgets"]) == ("jax_tune", 2, 4, [512])
+    assert (
+        "the JAX search for jax_ppo at 512 (4 candidates x 2 seeds x 2 tuning tasks), 2 of 4 "
+        f"compiled groups in `{pdir}`" in report_pending.in_progress_sentence([p])
+    )
 
     # The same command again trains only what is missing, and records what a whole run does.
     calls.clear()
@@ -280,20 +307,23 @@ def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypa
     # The resumed groups' own times count: the total is no less than their sum.
     saved = sum(t["wall_s"] for t in again["per_task_timing"])
     assert again["wall_time_s"] >= saved - 1e-6 > 0
-    assert not (tmp_path / "b" / "t.json.parts").exists()
+    assert not pdir.exists()  # the parts and the manifest go once the search is on record
 
     # A saved outcome from another search (its identity differs) is trained again, not read.
     calls.clear()
     monkeypatch.setattr(jax_learners.Compiled, "run", stopping)
     with pytest.raises(KeyboardInterrupt):
         jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
-    part = sorted((tmp_path / "b" / "t.json.parts").iterdir())[0]
+    part = sorted(pdir.glob("*--*.json"))[0]
     data = json.loads(part.read_text())
     part.write_text(json.dumps({**data, "ident": "0" * 64}))
+    wall = json.loads((pdir / "study.json").read_text())["wall_time_s_total"]
     calls.clear()
     with pytest.raises(KeyboardInterrupt):
         jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp)])
     assert calls == ["tune-gen-easy-1000", "tune-gen-medium-1001"]
+    # Each command adds its wall time to the manifest's.
+    assert json.loads((pdir / "study.json").read_text())["wall_time_s_total"] > wall
 
 
 def test_run_group_records_read_by_the_report(tmp_path):

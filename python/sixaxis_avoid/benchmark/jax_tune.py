@@ -23,7 +23,10 @@ trained at once, vmapped, on the suite's tuning tasks::
 - The search resumes: each compiled group's outcome is saved in ``--parts`` (default
   ``OUT.parts``) as it finishes, and the same command run again reads those back and trains
   only the rest (a long search can span several sessions). The trials file's wall and CPU
-  times add up the groups' own, wherever they ran; the parts go once it is written.
+  times add up the groups' own, wherever they ran; the parts go once it is written. The
+  directory's ``study.json`` is the search's manifest (:func:`search_manifest`), so a
+  search committed part way under ``docs/results/v2-pending`` is named on the page as a set
+  in progress.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
   ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
@@ -195,6 +198,55 @@ def tune(
     }
 
 
+def search_manifest(
+    parts: Path,
+    command: str,
+    learner: str,
+    budget: int,
+    trials: int,
+    seeds: list[int],
+    tasks: list[Any],
+    n_groups: int,
+) -> Any:
+    """Write ``parts/study.json``, the search's manifest in `run`'s form (``kind:
+    "jax_tune"``, ``command``, ``learners``, ``budget``, ``runs``: its compiled groups,
+    ``wall_time_s_total``: every command's wall time so far, ``finished: false``), so that
+    a search committed part way is named as a set in progress (:mod:`report_pending`) and
+    resumed by its command on another day or machine. Returns the function that rewrites it
+    (after each group); :func:`main` removes it with the parts once the trials file is
+    written."""
+    from sixaxis_avoid.benchmark.runner import write_manifest
+
+    state = parts / "study.json"
+    before = (
+        float(json.loads(state.read_text()).get("wall_time_s_total", 0.0))
+        if (state.exists())
+        else 0.0
+    )
+    t0 = time.perf_counter()
+
+    def write() -> None:
+        parts.mkdir(parents=True, exist_ok=True)
+        write_manifest(
+            parts,
+            {
+                "kind": "jax_tune",
+                "command": command,
+                "learners": [learner],
+                "budget": int(budget),
+                "candidates": int(trials),
+                "seeds": list(seeds),
+                "tasks": [t.id for t in tasks],
+                "runs": int(n_groups),
+                "finished": False,
+                "wall_time_s_total": before + time.perf_counter() - t0,
+            },
+        )
+
+    write()
+    return write
+
+
 def ray_dispatch(group_cpus: int) -> Any:
     """A :func:`jax_learners.train_candidates` dispatch over the connected Ray cluster: each
     group is a task reserving ``group_cpus`` CPUs (capped at the largest node's); outcomes
@@ -318,6 +370,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for c in draw(a.algo, a.trials, a.groups, a.sampler_seed)
     ]
     parts = a.parts or a.out.with_name(a.out.name + ".parts")
+    argv_s = argv if argv is not None else sys.argv[1:]
+    command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
+    learner = LEARNER[a.algo]
+    n_groups = len(tasks) * len(jl.candidate_groups(a.algo, candidates))
+    progress = search_manifest(parts, command, learner, a.budget, a.trials, seeds, tasks,
+                               n_groups)  # fmt: skip
     started = False
     if a.address:
         from sixaxis_avoid.benchmark.runner import init_ray
@@ -326,7 +384,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     try:
         result = tune(
             a.algo, suite, a.budget, candidates, seeds, tasks,
-            log=lambda m: print(m, file=sys.stderr), parts=parts,
+            log=lambda m: (print(m, file=sys.stderr), progress()), parts=parts,
             dispatch=ray_dispatch(a.group_cpus) if a.address else None,
         )  # fmt: skip
     finally:
@@ -335,9 +393,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
             ray.shutdown()
     part_files = [Path(f) for f in result.pop("part_files")]
-    argv_s = argv if argv is not None else sys.argv[1:]
-    command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
-    learner = LEARNER[a.algo]
     out = {
         "learner": learner,
         "algo": a.algo,
@@ -375,6 +430,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     for f in part_files:  # the search is on record: its saved groups are not needed again
         f.unlink(missing_ok=True)
+    (parts / "study.json").unlink(missing_ok=True)
     if parts.is_dir() and not any(parts.iterdir()):
         parts.rmdir()
     print(

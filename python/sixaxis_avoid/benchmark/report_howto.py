@@ -56,8 +56,9 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "after each run), and the next one adds its own. A JAX search (`python -m "
         "sixaxis_avoid.benchmark.jax_tune`) takes `--address` too: each compiled group (a tuning "
         "task and a draw of the static knobs, 10 for this suite) is a Ray task of `--group-cpus` "
-        "CPUs. It resumes from the groups it saved (`--parts`), so on one machine it can span "
-        "sessions. It comes before a budget's runs: a run at a budget with no tuned entry uses "
+        "CPUs. It resumes from the groups it saved (`--parts`), so it can span sessions; a "
+        "parts directory under `docs/results/v2-pending` (its `study.json` is the search's "
+        "manifest) is named in the headline as a set in progress until the search ends. It comes before a budget's runs: a run at a budget with no tuned entry uses "
         "the learner's defaults and is marked untuned (and an SB3 learner that borrows its JAX "
         "twin's values needs them borrowed first, `python -m sixaxis_avoid.benchmark.borrow`).",
         "",

@@ -1,5 +1,6 @@
 """Run sets in progress beside a study: ``<results>-pending/<dir>``, each one `run` command
-(or one ``sb3_tune`` search, its log directory) too long for one sitting, committed part way
+(or one ``sb3_tune`` search, its log directory, or one ``jax_tune`` search, its parts
+directory) too long for one sitting, committed part way
 so that the same command resumes it on another day or machine
 (docs/results/v2-pending/README.md). No figure reads them; the v2 page names them in its
 headline.
@@ -29,12 +30,19 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
     for manifest in sorted(root.glob("*/study.json")):
         man = json.loads(manifest.read_text())
         runs = load_runs(manifest.parent) if (manifest.parent / "runs").is_dir() else []
+        # "jax_tune": a JAX search's parts directory; its units are compiled groups, each
+        # saved as TASK--IDENT.json (jax_learners.group_part), not run files.
+        groups = (
+            len(list(manifest.parent.glob("*--*.json"))) if man.get("kind") == "jax_tune" else None
+        )
         out.append(
             {
                 "dir": str(manifest.parent),
                 "learners": man["learners"],
-                "budgets": sorted({int(r["spec"]["budget"]) for r in runs}),
-                "made": len(runs),
+                "budgets": [int(man["budget"])]
+                if groups is not None
+                else sorted({int(r["spec"]["budget"]) for r in runs}),
+                "made": len(runs) if groups is None else groups,
                 "of": int(man["runs"]),
                 "finished": bool(man.get("finished", True)),
                 "wall_time_s_total": float(man.get("wall_time_s_total", 0.0)),
@@ -57,15 +65,22 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
 def _describe(p: dict[str, Any]) -> str:
     budgets = ", ".join(fmt_steps(b) for b in p["budgets"]) or "—"
     what = f"{', '.join(p['learners'])} at {budgets}"
+    unit = "runs"
     if p["kind"] == "sb3_tune":
         what = (
             f"SB3's own search for {what} ({p['candidates']} candidates x {len(p['seeds'])} "
             f"seeds x {len(p['tasks'])} tuning tasks)"
         )
+    elif p["kind"] == "jax_tune":
+        what = (
+            f"the JAX search for {what} ({p['candidates']} candidates x {len(p['seeds'])} "
+            f"seeds x {len(p['tasks'])} tuning tasks)"
+        )
+        unit = "compiled groups"
     elif p.get("replaces"):
         what = f"{what} again on its current hyperparameters (to replace the study's runs there)"
     return (
-        f"{what}, {p['made']} of {p['of']} runs in `{p['dir']}` "
+        f"{what}, {p['made']} of {p['of']} {unit} in `{p['dir']}` "
         f"({p['wall_time_s_total'] / 3600:.1f} h of wall time so far)"
     )
 
