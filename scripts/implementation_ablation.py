@@ -20,6 +20,7 @@ tasks and seeds (docs/results/v2) into one JSON, with the commands that made the
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import json
 import re
 import shlex
@@ -195,6 +196,36 @@ def summary(algo: str, runs: Path, v2: Path) -> dict:
     return out
 
 
+def keep_replaced(
+    learner: str, old_runs: list[Path], v2: Path, removed: list[str], replaced_by: str
+) -> Path:
+    """Keep a re-run's old run files beside the study, in ``<v2>-replaced/<learner>-<budgets>``
+    (``-2``, ``-3``, ... when that is taken), with ``replaced.json``: the learner, budgets,
+    run count, the commands that made them and the command that replaced them. No figure of
+    the study reads them; the page's check of JAX against SB3 does where the SB3 runs that
+    replaced them no longer use the JAX learner's values (docs/results/v2-pending/README.md)."""
+    budgets = sorted({int(f.name.rsplit("__b", 1)[1].removesuffix(".json")) for f in old_runs})
+    root = v2.parent / f"{v2.name}-replaced"
+    base = f"{learner}-{'-'.join(str(b) for b in budgets)}"
+    dest, k = root / base, 1
+    while dest.exists():
+        k += 1
+        dest = root / f"{base}-{k}"
+    (dest / "runs").mkdir(parents=True)
+    for f in old_runs:
+        (dest / "runs" / f.name).write_text(f.read_text())
+    about = {
+        "learner": learner,
+        "budgets": budgets,
+        "runs": len(old_runs),
+        "commands": removed,
+        "replaced_by": replaced_by,
+        "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+    (dest / "replaced.json").write_text(json.dumps(about, indent=1) + "\n")
+    return dest
+
+
 def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> dict:
     """Merge a run of ``learner`` into ``new`` (outside the checkout) into suite v2's
     committed study ``v2``: its run files come in, and the manifest gains its command with
@@ -204,7 +235,8 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
     attempts whose time no manifest holds); a path inside the checkout becomes relative to
     it. A directory whose last command was stopped (``finished: false``) is refused. A re-run
     replaces the learner's runs at those budgets (the same set of run files): the old files
-    go, with their commands and their own wall times. Run files none of which the study has
+    leave the study, with their commands and their own wall times, and are kept beside it
+    (:func:`keep_replaced`). Run files none of which the study has
     (the learner's first runs at those budgets, or more seeds there) are added, and the
     earlier commands stay."""
     new_runs = sorted((new / "runs").glob(f"*__{learner}__*.json"))
@@ -236,6 +268,9 @@ def merge_v2(learner: str, new: Path, v2: Path, extra_wall_s: float = 0.0) -> di
         or f"--learners {learner} " not in c
         or (budget_flag is not None and f"--budgets {budget_flag.group(1)}" not in c)
     ]
+    if old_runs:
+        keep_replaced(learner, old_runs, v2, removed=[c for c in man["commands"] if c not in keep],
+                      replaced_by=command)  # fmt: skip
     for f in old_runs:
         f.unlink()
     for f in new_runs:

@@ -151,6 +151,21 @@ def test_merge_v2_adds_a_new_learners_runs_and_replaces_a_re_run(tmp_path):
     assert man["commands"] == [
         c.format("jax_dqn", 100000, v2), c.format("dqn", 30000, v2), c.format("jax_dqn", 30000, v2)
     ]  # fmt: skip
+    # The replaced files are kept beside the study, with what made and replaced them.
+    kept = tmp_path / "v2-replaced" / "jax_dqn-30000"
+    (f,) = (kept / "runs").iterdir()
+    assert f.name == "t__jax_dqn__s0__b30000.json"
+    assert json.loads(f.read_text())["timing"]["run_wall_time_s"] == 5.0  # the old one
+    about = json.loads((kept / "replaced.json").read_text())
+    assert (about["learner"], about["budgets"], about["runs"]) == ("jax_dqn", [30000], 1)
+    assert about["commands"] == [c.format("jax_dqn", 30000, v2)]
+    assert about["replaced_by"] == c.format("jax_dqn", 30000, v2)
+    assert not (tmp_path / "v2-replaced" / "dqn-30000").exists()  # dqn's runs were added
+    from sixaxis_avoid.benchmark.report_pending import replaced_sets
+
+    (kept_set,) = replaced_sets(v2)  # what the page's check of JAX against SB3 reads
+    assert kept_set["dir"] == str(kept) and kept_set["learner"] == "jax_dqn"
+    assert [r["timing"]["run_wall_time_s"] for r in kept_set["runs"]] == [5.0]
     (new2 / "runs" / "u__jax_dqn__s0__b30000.json").write_text("{}")
     with pytest.raises(SystemExit, match="not the same set"):
         mod.merge_v2("jax_dqn", new2, v2)

@@ -592,3 +592,45 @@ def test_tuning_changes_name_the_budgets_where_a_learners_values_change():
     assert "ppo from 300k (tuned; implementation sb3) to 1.00M (jax_ppo's tuned values" in line
     assert "jax_ppo from" not in line and "dqn" not in line
     assert tuning_changes_line([]) == ""
+
+
+def test_twin_check_uses_the_replaced_runs_where_sb3_runs_on_its_own_values():
+    """Where SB3 PPO's runs in the study are on its own search's values, the check of the two
+    implementations compares jax_ppo with SB3 PPO's replaced runs on jax_ppo's values (kept
+    beside the study); without those on every task the budget is named and not compared."""
+    from sixaxis_avoid.benchmark.borrow import borrowed_status
+    from sixaxis_avoid.benchmark.twins import twin_agreement, twin_rows
+
+    def run(lr, task, seed, score, status):
+        return {"spec": {"learner": lr, "task": {"id": task}, "seed": seed, "budget": 100,
+                         "hyperparams_status": status},
+                "result": {"score": score}}  # fmt: skip
+
+    tasks, borrowed = ["t1", "t2"], borrowed_status("jax_ppo")
+    runs = [run("jax_ppo", t, s, 1.0, "tuned") for t in tasks for s in range(3)]
+    runs += [run("ppo", t, s, 0.0, "tuned") for t in tasks for s in range(3)]
+    old = [run("ppo", t, s, 1.0, borrowed) for t in tasks for s in range(3)]
+    other = [run("ppo", t, s, 0.5, borrowed) for t in tasks for s in range(3)]
+    for r in other:
+        r["spec"]["budget"] = 300  # another budget's replaced runs do not stand in
+    a = {"budgets": [100], "tasks": tasks, "runs": runs,
+         "per_budget": {100: {"complete": ["jax_ppo", "ppo"]}},
+         "replaced": [{"dir": "v2-replaced/ppo-100", "runs": old},
+                      {"dir": "v2-replaced/ppo-300", "runs": other}]}  # fmt: skip
+    (r,) = twin_agreement(a, reps=200)
+    assert r["sb3_runs"] == "v2-replaced/ppo-100" and r["sb3_mean"] == pytest.approx(1.0)
+    assert r["overlap"] and r["seeds"] == [0, 1, 2]
+    text = "\n".join(twin_rows([r]))
+    assert "| jax_ppo | ppo (its runs on jax_ppo's values that the study replaced, " in text
+    # Replaced runs that miss a task do not stand in: the budget is named, not compared.
+    a["replaced"][0]["runs"] = [x for x in old if x["spec"]["task"]["id"] == "t1"]
+    (r,) = twin_agreement(a, reps=200)
+    assert r == {"jax": "jax_ppo", "sb3": "ppo", "budget": 100, "skipped": ["tuned"]}
+    text = "\n".join(twin_rows([r]))
+    assert "Not compared: ppo at 100 runs on other values than jax_ppo's (tuned)" in text
+    assert "| jax_ppo | ppo |" not in text
+    # SB3 runs on the twin's values are compared as they are.
+    for x in runs:
+        x["spec"]["hyperparams_status"] = borrowed if x["spec"]["learner"] == "ppo" else "tuned"
+    (r,) = twin_agreement(a, reps=200)
+    assert r["sb3_runs"] is None and r["sb3_mean"] == pytest.approx(0.0)

@@ -50,6 +50,13 @@ class BorrowError(ValueError):
     """A twin entry that cannot be borrowed (names the field and value)."""
 
 
+def borrowed_status(twin: str) -> str:
+    """The ``status`` of an SB3 entry borrowed from its JAX ``twin`` (and so the
+    ``hyperparams_status`` of its runs): how a report tells runs on the twin's values from
+    runs on values of SB3's own search (status ``tuned``)."""
+    return f"{twin}'s tuned values and rejax's implementation (not tuned for SB3)"
+
+
 def sb3_values(learner: str, values: dict[str, Any], where: str) -> tuple[dict[str, Any], str]:
     """A JAX learner's values (SB3's names) as the SB3 ``learner``'s settings: the
     ``activation`` is checked to be SB3's MlpPolicy default and dropped, and so is DQN's
@@ -90,7 +97,7 @@ def borrowed_entry(data: dict[str, Any], learner: str, budget: int) -> dict[str,
     values["implementation"] = "rejax"
     return {
         "values": values,
-        "status": f"{twin}'s tuned values and rejax's implementation (not tuned for SB3)",
+        "status": borrowed_status(twin),
         "source": f"{twin} by_budget {int(budget)}: the same algorithm tuned by its JAX twin "
         f"({entry.get('n_trials', '?')} trials x {len(entry.get('seeds', [])) or '?'} seeds x "
         f"{len(entry.get('tasks', [])) or '?'} tuning tasks); the values use SB3's names. "

@@ -95,3 +95,18 @@ def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
         + "; ".join(_describe(p) for p in pending)
         + "."
     )
+
+
+def replaced_sets(results: Path) -> list[dict[str, Any]]:
+    """Run files a re-run replaced in the study ``results``, kept beside it in
+    ``<results>-replaced/<dir>`` (``scripts/implementation_ablation.py merge-v2``): each
+    set's ``dir``, ``learner``, ``budgets`` (env steps), the ``commands`` that made them, the
+    command that ``replaced_by`` them, and its ``runs`` (the records). No figure of the study
+    reads them; the check of JAX against SB3 does (:mod:`twins`) where the SB3 runs that
+    replaced them are on other values than the JAX learner's."""
+    root = results.parent / f"{results.name}-replaced"
+    out = []
+    for about in sorted(root.glob("*/replaced.json")):
+        meta = json.loads(about.read_text())
+        out.append({"dir": str(about.parent), **meta, "runs": load_runs(about.parent)})
+    return out

@@ -27,7 +27,11 @@ from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
 from sixaxis_avoid.benchmark.report_compute import compute_rows
 from sixaxis_avoid.benchmark.report_howto import how_to_run, report_command_v2
-from sixaxis_avoid.benchmark.report_pending import in_progress_sentence, sets_in_progress
+from sixaxis_avoid.benchmark.report_pending import (
+    in_progress_sentence,
+    replaced_sets,
+    sets_in_progress,
+)
 from sixaxis_avoid.benchmark.runner import load_runs
 from sixaxis_avoid.benchmark.stats import fmt_ci, fmt_steps
 from sixaxis_avoid.benchmark.tasks import Suite, load_suite
@@ -285,6 +289,7 @@ def analyse_v2(
             "missing_budgets": missing,
             "over_budget": over,
             "in_progress": sets_in_progress(results),
+            "replaced": replaced_sets(results),
         }
     )
     a["twins"] = twin_agreement(a, reps=reps)

@@ -14,6 +14,7 @@ import numpy as np
 
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark.agreement import permutation_p
+from sixaxis_avoid.benchmark.borrow import borrowed_status
 from sixaxis_avoid.benchmark.jax_values import JAX_LEARNER
 from sixaxis_avoid.benchmark.stats import fmt_ci, fmt_steps
 
@@ -30,13 +31,40 @@ def twin_agreement(a: dict[str, Any], reps: int = 2000) -> list[dict[str, Any]]:
     learners' mean final SPL on the seeds both ran (95% stratified-bootstrap intervals), the
     difference of the means with an interval from resampling each learner's seeds within
     each task on its own, whether the two intervals overlap, and the tasks whose exact
-    two-sided permutation test of the final scores gives p < :data:`PARTING_P`."""
+    two-sided permutation test of the final scores gives p < :data:`PARTING_P`.
+
+    Where the SB3 learner's runs in the study are on values of its own search (a status
+    other than :func:`borrow.borrowed_status` of the twin), the runs on the twin's values
+    that they replaced (``a["replaced"]``, kept beside the study) stand in, and
+    ``sb3_runs`` names their directory; without those on every task the budget gets a row
+    with ``skipped`` (the study runs' statuses) and no figures."""
     out: list[dict[str, Any]] = []
     for jx, sb in TWINS.items():
         for b in a["budgets"]:
             if not {jx, sb} <= set(a["per_budget"][b]["complete"]):
                 continue
             at = [r for r in a["runs"] if stats.budget_of_run(r) == b]
+            twin_status = borrowed_status(jx)
+            own = sorted(
+                {r["spec"].get("hyperparams_status") for r in at if r["spec"]["learner"] == sb}
+                - {None, twin_status}
+            )
+            source = None
+            if own:
+                # The SB3 runs here are on values of their own: the runs on the twin's values
+                # that they replaced stand in, when every task has them.
+                kept: dict[tuple[str, int], dict[str, Any]] = {}
+                for rs in a.get("replaced", []):
+                    for r in rs["runs"]:
+                        spec = r["spec"]
+                        if (spec["learner"] == sb and stats.budget_of_run(r) == b
+                                and spec.get("hyperparams_status") == twin_status):  # fmt: skip
+                            kept[(spec["task"]["id"], spec["seed"])] = r
+                            source = rs["dir"]
+                if {t for t, _ in kept} != set(a["tasks"]):
+                    out.append({"jax": jx, "sb3": sb, "budget": b, "skipped": own})
+                    continue
+                at = [r for r in at if r["spec"]["learner"] != sb] + list(kept.values())
             scores, seeds = stats.score_matrices(at, [jx, sb], a["tasks"])
             if len(seeds) < 2:
                 continue
@@ -69,6 +97,7 @@ def twin_agreement(a: dict[str, Any], reps: int = 2000) -> list[dict[str, Any]]:
                     "diff_ci": [float(np.quantile(diffs, 0.025)), float(np.quantile(diffs, 0.975))],
                     "overlap": bool(cx[0] <= cy[1] + 1e-12 and cy[0] <= cx[1] + 1e-12),
                     "parting": parting,
+                    "sb3_runs": source,
                 }
             )
     return out
@@ -87,20 +116,41 @@ def twin_rows(rows: list[dict[str, Any]]) -> list[str]:
         "interval from resampling each learner's seeds within each task on its own, and the "
         f"tasks where an exact permutation test of the final scores gives p < {PARTING_P} "
         "(with 21 tasks, about one such task is expected by chance at that level). "
-        "*Agree*: the two intervals overlap.",
+        "*Agree*: the two intervals overlap. Where the SB3 learner's runs in the study are "
+        "on values of its own search, its earlier runs on the JAX learner's values, which "
+        "they replaced and which are kept beside the study (`docs/results/v2-replaced`), "
+        "stand in, and the row names them.",
         "",
         "| JAX | SB3 | budget | seeds | JAX mean | SB3 mean | difference | agree | tasks with "
         f"p < {PARTING_P} |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for r in rows:
+    for r in (r for r in rows if "skipped" not in r):
         parting = "; ".join(
             f"{p['task']} ({p['jax']:.2f} vs {p['sb3']:.2f}, p {p['p']:.3f})" for p in r["parting"]
         )
+        sb3 = r["sb3"] + (
+            f" (its runs on {r['jax']}'s values that the study replaced, `{r['sb3_runs']}`)"
+            if r.get("sb3_runs")
+            else ""
+        )
         L.append(
-            f"| {r['jax']} | {r['sb3']} | {fmt_steps(r['budget'])} | {len(r['seeds'])} | "
+            f"| {r['jax']} | {sb3} | {fmt_steps(r['budget'])} | {len(r['seeds'])} | "
             f"{fmt_ci(r['jax_mean'], r['jax_ci'])} | {fmt_ci(r['sb3_mean'], r['sb3_ci'])} | "
             f"{r['diff']:+.3f} [{r['diff_ci'][0]:+.3f}, {r['diff_ci'][1]:+.3f}] | "
             f"{'yes' if r['overlap'] else '**no**'} | {parting or 'none'} |"
         )
+    skipped = [r for r in rows if "skipped" in r]
+    if skipped:
+        L += [
+            "",
+            "Not compared: "
+            + "; ".join(
+                f"{r['sb3']} at {fmt_steps(r['budget'])} runs on other values than "
+                f"{r['jax']}'s ({', '.join(r['skipped'])}), and none of its runs on "
+                f"{r['jax']}'s values are kept"
+                for r in skipped
+            )
+            + ".",
+        ]
     return [*L, ""]
