@@ -634,3 +634,38 @@ def test_twin_check_uses_the_replaced_runs_where_sb3_runs_on_its_own_values():
         x["spec"]["hyperparams_status"] = borrowed if x["spec"]["learner"] == "ppo" else "tuned"
     (r,) = twin_agreement(a, reps=200)
     assert r["sb3_runs"] is None and r["sb3_mean"] == pytest.approx(0.0)
+
+
+def test_replaced_runs_line_compares_the_study_runs_with_those_they_replaced():
+    """The headline names a learner's runs that a re-run on other values replaced: their
+    mean and success, and the study's runs against them on the same tasks and seeds."""
+    from sixaxis_avoid.benchmark.report_v2 import replaced_at, replaced_line
+
+    def run(task, seed, score, status, budget=300):
+        return {"spec": {"learner": "ppo", "task": {"id": task}, "seed": seed, "budget": budget,
+                         "hyperparams_status": status},
+                "result": {"score": score, "success": score, "optimal_lengths": [5]}}  # fmt: skip
+
+    tasks = ["t1", "t2"]
+    now = [run(t, s, 0.0 if (t, s) in {("t1", 0), ("t1", 1)} else 1.0, "tuned")
+           for t in tasks for s in range(3)]  # fmt: skip
+    before = [run(t, s, 0.0 if (t, s) == ("t2", 2) else 1.0, "borrowed") for t in tasks
+              for s in range(3)]  # fmt: skip
+    elsewhere = [run(t, s, 0.0, "borrowed", budget=100) for t in tasks for s in range(3)]
+    a = {"runs": now, "tasks": tasks,
+         "replaced": [{"dir": "v2-replaced/ppo-300", "runs": before},
+                      {"dir": "v2-replaced/ppo-100", "runs": elsewhere}]}  # fmt: skip
+    (r,) = replaced_at(a, 300, reps=200)
+    assert (r["learner"], r["dir"], r["status"], r["runs"]) == (
+        "ppo",
+        "v2-replaced/ppo-300",
+        ["borrowed"],
+        6,
+    )
+    assert r["mean"] == pytest.approx(5 / 6) and r["success"] == (5, 6)
+    assert (r["higher_now"], r["higher_before"]) == (1, 2)
+    assert r["diff"] == pytest.approx(4 / 6 - 5 / 6)
+    line = replaced_line([r], 300)
+    assert line.startswith("**Replaced runs**: ppo's 6 runs at 300 on borrowed, which its ")
+    assert "score -0.167 against them on the same tasks and seeds (1 runs higher, 2 lower" in line
+    assert replaced_line([], 300) == "" and replaced_at({**a, "replaced": []}, 300) == []

@@ -123,6 +123,71 @@ def tuning_changes_line(changes: list[dict[str, Any]]) -> str:
     )
 
 
+def replaced_at(a: dict[str, Any], b: int, reps: int = 2000) -> list[dict[str, Any]]:
+    """Each learner whose runs at budget ``b`` (env steps) replaced earlier ones on other
+    hyperparameters (``a["replaced"]``, kept beside the study): the earlier runs' status,
+    mean final SPL with its 95% stratified-bootstrap interval and success count, against
+    the study's runs on the same (task, seed) pairs: how many score higher on each side,
+    and the difference of the means (study minus earlier)."""
+    out = []
+    study = {
+        (r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"]): r
+        for r in a["runs"]
+        if stats.budget_of_run(r) == b
+    }
+    for rs in a.get("replaced", []):
+        old = [r for r in rs["runs"] if stats.budget_of_run(r) == b]
+        pairs = [
+            (r, study[k])
+            for r in old
+            if (k := (r["spec"]["learner"], r["spec"]["task"]["id"], r["spec"]["seed"])) in study
+        ]
+        if not pairs:
+            continue
+        lr = old[0]["spec"]["learner"]
+        tasks = [t for t in a["tasks"] if any(r["spec"]["task"]["id"] == t for r, _ in pairs)]
+        scores, seeds = stats.score_matrices([r for r, _ in pairs], [lr], tasks)
+        if not seeds:
+            continue
+        mean, ci = stats.mean_ci(scores[lr], reps=reps)
+        now = float(np.mean([n["result"]["score"] for _, n in pairs]))
+        before = float(np.mean([r["result"]["score"] for r, _ in pairs]))
+        out.append(
+            {
+                "learner": lr,
+                "dir": rs["dir"],
+                "status": sorted({r["spec"].get("hyperparams_status", "n/a") for r, _ in pairs}),
+                "runs": len(pairs),
+                "mean": mean,
+                "mean_ci": ci,
+                "success": stats.success_count([r for r, _ in pairs]),
+                "higher_before": sum(r["result"]["score"] > n["result"]["score"] for r, n in pairs),
+                "higher_now": sum(n["result"]["score"] > r["result"]["score"] for r, n in pairs),
+                "diff": now - before,
+            }
+        )
+    return out
+
+
+def replaced_line(rows: list[dict[str, Any]], b: int) -> str:
+    """The headline's *Replaced runs* line (:func:`replaced_at`; '' without any)."""
+    if not rows:
+        return ""
+    return (
+        "**Replaced runs**: "
+        + "; ".join(
+            f"{r['learner']}'s {r['runs']} runs at {fmt_steps(b)} on {', '.join(r['status'])}, "
+            f"which its runs above replaced (`{r['dir']}`), scored a mean SPL of "
+            f"{fmt_ci(r['mean'], r['mean_ci'])} with {r['success'][0]}/{r['success'][1]} "
+            f"targets reached: the runs above score {r['diff']:+.3f} against them on the same "
+            f"tasks and seeds ({r['higher_now']} runs higher, {r['higher_before']} lower, the "
+            "rest equal)"
+            for r in rows
+        )
+        + "."
+    )
+
+
 def fmt_wilson(w: dict[str, Any]) -> str:
     return f"{w['rate']:.3f} [{w['lo']:.3f}, {w['hi']:.3f}] ({w['successes']}/{w['trials']})"
 
@@ -620,6 +685,8 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         }
         if impl:
             L += [implementation_line(impl), ""]
+        if line := replaced_line(replaced_at(a, b, reps=a["reps"]), b):
+            L += [line, ""]
         if a["over_budget"]:
             L += [
                 "**Over budget**: these runs used more env steps than the budget they are "
