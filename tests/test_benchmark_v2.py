@@ -669,3 +669,17 @@ def test_replaced_runs_line_compares_the_study_runs_with_those_they_replaced():
     assert line.startswith("**Replaced runs**: ppo's 6 runs at 300 on borrowed, which its ")
     assert "score -0.167 against them on the same tasks and seeds (1 runs higher, 2 lower" in line
     assert replaced_line([], 300) == "" and replaced_at({**a, "replaced": []}, 300) == []
+
+
+def test_near_best_counts_the_candidates_within_one_run_of_the_best(tmp_path):
+    """The tuning record's *near the best*: candidates within 1 / (seeds x tasks) of the best
+    objective, the best included, of those scored (a trial without an objective is not)."""
+    from sixaxis_avoid.benchmark.report_compute import near_best
+
+    f = tmp_path / "t.json"
+    trials = [{"objective": x} for x in (1.0, 0.94, 0.9334, 0.93, 0.5)] + [{"objective": None}]
+    f.write_text(json.dumps({"seeds": [0, 1, 2], "tasks": list("abcde"), "trials": trials}))
+    assert near_best(str(f)) == (3, 5)  # 1.0, 0.94 and 0.9334 lie within 1/15 of 1.0
+    f.write_text(json.dumps({"seeds": [], "tasks": ["a"], "trials": trials}))
+    assert near_best(str(f)) is None
+    assert near_best(str(tmp_path / "missing.json")) is None

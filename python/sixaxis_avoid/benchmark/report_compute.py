@@ -48,6 +48,24 @@ def _trials_file(path: str) -> Path | None:
     return None
 
 
+def near_best(path: str) -> tuple[int, int] | None:
+    """How decisive a search was, from its trials file (``path`` as the hyperparameter file
+    records it): ``(near, of)``, the candidates whose objective lies within one run's full
+    score of the best one's (``1 / (seeds x tasks)``, the best included) out of all that were
+    scored. The search cannot tell those apart; None when the file or its counts are
+    missing."""
+    f = _trials_file(path)
+    if f is None:
+        return None
+    data = json.loads(f.read_text())
+    runs = len(data.get("seeds", [])) * len(data.get("tasks", []))
+    objs = [t["objective"] for t in data.get("trials", []) if t.get("objective") is not None]
+    if not runs or not objs:
+        return None
+    top = max(objs)
+    return sum(o >= top - 1.0 / runs - 1e-12 for o in objs), len(objs)
+
+
 def compute_rows(a: dict[str, Any]) -> list[str]:
     """What the study cost, per learner and budget: its tuning search's wall and CPU time
     (each trials file counted once, for the learner it tuned) and its runs' wall time and

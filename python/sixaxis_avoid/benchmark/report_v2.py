@@ -25,7 +25,7 @@ import numpy as np
 from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
-from sixaxis_avoid.benchmark.report_compute import compute_rows
+from sixaxis_avoid.benchmark.report_compute import compute_rows, near_best
 from sixaxis_avoid.benchmark.report_howto import how_to_run, report_command_v2
 from sixaxis_avoid.benchmark.report_pending import (
     in_progress_sentence,
@@ -460,10 +460,15 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
         f"Hyperparameter file: `{hpmod.display_path(data['path'])}`"
         + ("" if Path(data["path"]).exists() else " (not written yet: no learner is tuned)")
         + ". A run at budget B takes the values tuned at B; without them it runs with the "
-        "learner's defaults and is marked **untuned** (never values tuned at another budget).",
+        "learner's defaults and is marked **untuned** (never values tuned at another budget). "
+        "*Near the best*: the candidates whose objective lies within one run's full score of "
+        "the best one's (1 / (seeds x tasks) of the search, the best included), out of all "
+        "scored; the search cannot tell them apart, so on the study's tasks its choice among "
+        "them may do better or worse than another of them.",
         "",
-        "| learner | budget | status | trials | objective | status in the run files |",
-        "|---|---|---|---|---|---|",
+        "| learner | budget | status | trials | objective | near the best | status in the run "
+        "files |",
+        "|---|---|---|---|---|---|---|",
     ]
     for lr in learners:
         by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
@@ -474,17 +479,19 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
             if e is None:
                 # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".
                 status = "n/a" if statuses == {"n/a"} else "**untuned**"
-                out.append(f"| {lr} | {fmt_steps(b)} | {status} | — | — | {runs} |")
+                out.append(f"| {lr} | {fmt_steps(b)} | {status} | — | — | — | {runs} |")
                 continue
             obj = e.get("objective")
             obj_s = f"{obj:.3f}" if isinstance(obj, (int, float)) else str(obj or "—")
             trials = f"`{e['trials']}`" if e.get("trials") else "—"
+            near = near_best(e["trials"]) if e.get("trials") else None
+            near_s = f"{near[0]} of {near[1]}" if near else "—"
             out.append(
                 f"| {lr} | {fmt_steps(b)} | {e.get('status', 'tuned')} | {trials} | {obj_s} "
-                f"| {runs} |"
+                f"| {near_s} | {runs} |"
             )
     if not learners:
-        out.append("| (none yet) | — | **untuned** | — | — | — |")
+        out.append("| (none yet) | — | **untuned** | — | — | — | — |")
     return out
 
 
