@@ -667,7 +667,10 @@ def test_replaced_runs_line_compares_the_study_runs_with_those_they_replaced():
     assert r["diff"] == pytest.approx(4 / 6 - 5 / 6)
     line = replaced_line([r], 300)
     assert line.startswith("**Replaced runs**: ppo's 6 runs at 300 on borrowed, which its ")
-    assert "score -0.167 against them on the same tasks and seeds (1 runs higher, 2 lower" in line
+    assert (
+        "score -0.167 against them on the same tasks and seeds (higher in 1 of the 6 pairs, "
+        "lower in 2, equal in the rest)" in line
+    )
     assert replaced_line([], 300) == "" and replaced_at({**a, "replaced": []}, 300) == []
 
 

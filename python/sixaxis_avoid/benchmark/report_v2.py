@@ -180,8 +180,8 @@ def replaced_line(rows: list[dict[str, Any]], b: int) -> str:
             f"which its runs above replaced (`{r['dir']}`), scored a mean SPL of "
             f"{fmt_ci(r['mean'], r['mean_ci'])} with {r['success'][0]}/{r['success'][1]} "
             f"targets reached: the runs above score {r['diff']:+.3f} against them on the same "
-            f"tasks and seeds ({r['higher_now']} runs higher, {r['higher_before']} lower, the "
-            "rest equal)"
+            f"tasks and seeds (higher in {r['higher_now']} of the {r['runs']} pairs, lower in "
+            f"{r['higher_before']}, equal in the rest)"
             for r in rows
         )
         + "."
