@@ -550,7 +550,7 @@ def test_twin_agreement_compares_each_jax_learner_with_its_sb3_twin():
 def test_the_implementation_line_names_each_implementation_with_its_own_note():
     """SB3 PPO on rejax's implementation (borrowed values) and on SB3's own (its own
     search's values) are told apart: each gets its own note, a learner without notes none."""
-    from sixaxis_avoid.benchmark.report_v2 import IMPLEMENTATION_NOTES, implementation_line
+    from sixaxis_avoid.benchmark.report_setups import IMPLEMENTATION_NOTES, implementation_line
 
     line = implementation_line({"ppo": ["rejax", "sb3"], "beta": ["rejax"]})
     assert line.startswith("**Implementation**: ppo runs with `implementation: rejax` (")
@@ -564,7 +564,7 @@ def test_tuning_changes_name_the_budgets_where_a_learners_values_change():
     """A plateau mark between two budgets whose runs came from different searches (SB3 PPO
     on its own values at 300k, on jax_ppo's at 1M) is named; one source along the axis, or
     a budget the learner did not run, is not."""
-    from sixaxis_avoid.benchmark.report_v2 import tuning_changes, tuning_changes_line
+    from sixaxis_avoid.benchmark.report_setups import tuning_changes, tuning_changes_line
 
     borrowed = ["jax_ppo's tuned values and rejax's implementation (not tuned for SB3)"]
 
@@ -639,7 +639,7 @@ def test_twin_check_uses_the_replaced_runs_where_sb3_runs_on_its_own_values():
 def test_replaced_runs_line_compares_the_study_runs_with_those_they_replaced():
     """The headline names a learner's runs that a re-run on other values replaced: their
     mean and success, and the study's runs against them on the same tasks and seeds."""
-    from sixaxis_avoid.benchmark.report_v2 import replaced_at, replaced_line
+    from sixaxis_avoid.benchmark.report_setups import replaced_at, replaced_line
 
     def run(task, seed, score, status, budget=300):
         return {"spec": {"learner": "ppo", "task": {"id": task}, "seed": seed, "budget": budget,

@@ -72,6 +72,7 @@ LAYERS = [
     "sixaxis_avoid.benchmark.report_howto",
     "sixaxis_avoid.benchmark.report_pending",
     "sixaxis_avoid.benchmark.twins",
+    "sixaxis_avoid.benchmark.report_setups",
     "sixaxis_avoid.benchmark.report_v2",
     "sixaxis_avoid.benchmark.tune",
     "sixaxis_avoid.benchmark",
