@@ -203,7 +203,7 @@ def keep_replaced(
     (``-2``, ``-3``, ... when that is taken), with ``replaced.json``: the learner, budgets,
     run count, the commands that made them and the command that replaced them. No figure of
     the study reads them; the page's check of JAX against SB3 does where the SB3 runs that
-    replaced them no longer use the JAX learner's values (docs/results/v2-pending/README.md)."""
+    replaced them no longer use the JAX learner's values (docs/results/v2-replaced/README.md)."""
     budgets = sorted({int(f.name.rsplit("__b", 1)[1].removesuffix(".json")) for f in old_runs})
     root = v2.parent / f"{v2.name}-replaced"
     base = f"{learner}-{'-'.join(str(b) for b in budgets)}"

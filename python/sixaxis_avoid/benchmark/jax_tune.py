@@ -218,11 +218,9 @@ def search_manifest(
     from sixaxis_avoid.benchmark.runner import write_manifest
 
     state = parts / "study.json"
-    before = (
-        float(json.loads(state.read_text()).get("wall_time_s_total", 0.0))
-        if (state.exists())
-        else 0.0
-    )
+    before = 0.0
+    if state.exists():  # an earlier command of the same search: its wall time counts too
+        before = float(json.loads(state.read_text()).get("wall_time_s_total", 0.0))
     t0 = time.perf_counter()
 
     def write() -> None:
