@@ -351,6 +351,11 @@ def test_v2_headline_sits_where_every_ranked_learner_ran(tmp_path):
     assert "mean SPL at the next budget (100k) lies inside" in text
     assert "Not every learner ran at 100k; the plateau is the best learners' own" in text
     assert "Not run yet: beta at 100k." in text
+    # 270 runs less beta's 30 at 100k: no longer a product of learners, tasks, seeds, budgets.
+    assert (
+        "240 runs: 3 learners, 3 tasks, 3 budgets; 8 of the 9 learner-budget pairs run "
+        "(*Score by budget*), 10 seeds per task at 8." in text
+    )
     head = text.split("<!-- benchmark-headline:begin -->")[1].split("<!-- benchmark-head")[0]
     assert "| alpha |" in head and "| beta |" in head
     # Without alpha's 100k runs too, nothing after 10k can show the plateau.
@@ -359,6 +364,24 @@ def test_v2_headline_sits_where_every_ranked_learner_ran(tmp_path):
     a = write_report_v2(out, md, reps=100, suite=str(suite_path))
     assert a["headline"]["budget"] == 10000 and not a["headline"]["plateaued"]
     assert "The plateau is not shown" in md.read_text()
+
+
+def test_v2_runs_line_names_seeds_per_learner_and_budget():
+    """Where the deep learners run 5 seeds and the others 10, the line says so instead of
+    multiplying learners, tasks, seeds and budgets into a count the runs do not fill."""
+    from sixaxis_avoid.benchmark.report_v2 import runs_line
+
+    def run(learner: str, budget: int, seed: int) -> dict:
+        return {"spec": {"learner": learner, "seed": seed, "budget": budget,
+                         "budget_axis": budget}}  # fmt: skip
+
+    runs = [run("a", b, s) for b in (10, 100) for s in range(10) for _ in range(2)]
+    assert runs_line(runs, 1, 2, 2) == "40 runs: 1 learners x 2 tasks x 10 seeds x 2 budgets"
+    runs += [run("d", b, s) for b in (10, 100) for s in range(5) for _ in range(2)]
+    assert runs_line(runs, 2, 2, 2) == (
+        "60 runs: 2 learners, 2 tasks, 2 budgets; 4 of the 4 learner-budget pairs run "
+        "(*Score by budget*), 10 seeds per task at 2, 5 at 2"
+    )
 
 
 def test_v2_report_before_any_run_says_so(tmp_path):

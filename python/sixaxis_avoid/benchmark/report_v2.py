@@ -445,6 +445,34 @@ def headline_table(a: dict[str, Any], b: int) -> list[str]:
     return out
 
 
+def runs_line(runs: list[dict[str, Any]], n_learners: int, n_tasks: int, n_budgets: int) -> str:
+    """What the study's runs are: a product of learners, tasks, seeds and budgets when they
+    fill one, else the learner-budget pairs run and the seeds per task at each (a learner can
+    miss a budget, and the deep learners run fewer seeds than the others)."""
+    seeds: dict[tuple[str, int], set[int]] = {}
+    for r in runs:
+        spec = r["spec"]
+        seeds.setdefault((spec["learner"], stats.budget_of_run(r)), set()).add(spec["seed"])
+    n_seeds = len({s for ss in seeds.values() for s in ss})
+    if len(runs) == n_learners * n_tasks * n_seeds * n_budgets:
+        return (
+            f"{len(runs)} runs: {n_learners} learners x {n_tasks} tasks x {n_seeds} seeds x "
+            f"{n_budgets} budgets"
+        )
+    by_count: dict[int, int] = {}
+    for ss in seeds.values():
+        by_count[len(ss)] = by_count.get(len(ss), 0) + 1
+    counts = sorted(by_count.items(), reverse=True)
+    per = ", ".join(
+        f"{k} seeds per task at {v}" if i == 0 else f"{k} at {v}" for i, (k, v) in enumerate(counts)
+    )
+    return (
+        f"{len(runs)} runs: {n_learners} learners, {n_tasks} tasks, {n_budgets} budgets; "
+        f"{len(seeds)} of the {n_learners * n_budgets} learner-budget pairs run (*Score by "
+        f"budget*), {per}"
+    )
+
+
 def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Path | None) -> str:
     suite = a["suite"]
     rel = {k: os.path.relpath(v, out.parent) for k, v in figs.items()}
@@ -485,11 +513,8 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         m = a["manifest"]
         head = a["headline"]
         b = head["budget"] if head else max(a["budgets"])
-        n_runs = len(a["runs"])
-        n_seeds = len({r["spec"]["seed"] for r in a["runs"]})
         L += [
-            f"{n_runs} runs: {len(a['learners'])} learners x {len(a['tasks'])} tasks x "
-            f"{n_seeds} seeds x {len(a['budgets'])} budgets"
+            runs_line(a["runs"], len(a["learners"]), len(a["tasks"]), len(a["budgets"]))
             + (f". {provenance(m)}." if m and "date" in m else ".")
             + "".join(f" {s}" for s in [run_machines(a["runs"])] if s),
             "",
