@@ -454,7 +454,8 @@ def runs_line(runs: list[dict[str, Any]], n_learners: int, n_tasks: int, n_budge
         spec = r["spec"]
         seeds.setdefault((spec["learner"], stats.budget_of_run(r)), set()).add(spec["seed"])
     n_seeds = len({s for ss in seeds.values() for s in ss})
-    if len(runs) == n_learners * n_tasks * n_seeds * n_budgets:
+    full = len(seeds) == n_learners * n_budgets and all(len(ss) == n_seeds for ss in seeds.values())
+    if full and len(runs) == n_learners * n_tasks * n_seeds * n_budgets:
         return (
             f"{len(runs)} runs: {n_learners} learners x {n_tasks} tasks x {n_seeds} seeds x "
             f"{n_budgets} budgets"
