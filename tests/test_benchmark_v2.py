@@ -567,7 +567,31 @@ def test_twin_agreement_compares_each_jax_learner_with_its_sb3_twin():
             x["result"]["score"] = float(x["spec"]["seed"] < 3)
     r = twin_agreement(a, reps=500)[0]
     assert r["overlap"] and r["parting"] == [] and r["diff_ci"][0] < 0 < r["diff_ci"][1]
+    text = "\n".join(twin_rows([r]))
+    assert "| yes | none |" in text and "Where they part" not in text
     assert twin_rows([]) == []
+
+
+def test_twin_rows_say_when_intervals_overlap_but_the_difference_excludes_zero():
+    """Overlapping 95% intervals are the weaker test: a row whose difference's interval
+    excludes 0 is not called plain agreement, and the page names it under the table."""
+    from sixaxis_avoid.benchmark.twins import agree_label, twin_rows
+
+    base = {"jax": "jax_dqn", "sb3": "dqn", "budget": 100000, "seeds": [0, 1, 2, 3, 4],
+            "jax_mean": 0.596, "jax_ci": [0.553, 0.640], "sb3_mean": 0.679,
+            "sb3_ci": [0.635, 0.715], "diff": -0.083, "diff_ci": [-0.137, -0.025],
+            "overlap": True, "parting": [], "sb3_runs": None}  # fmt: skip
+    assert agree_label(base) == "intervals overlap; the difference's excludes 0"
+    assert agree_label({**base, "diff_ci": [-0.1, 0.02]}) == "yes"
+    assert agree_label({**base, "diff_ci": [0.0, 0.048]}) == "yes"  # 0 at the edge is held
+    assert agree_label({**base, "overlap": False}) == "**no**"
+    same = {**base, "budget": 30000, "diff": 0.005, "diff_ci": [-0.049, 0.06]}
+    text = "\n".join(twin_rows([same, base]))
+    assert "| -0.083 [-0.137, -0.025] | intervals overlap; the difference's excludes 0 |" in text
+    assert (
+        "**Where they part**: jax_dqn against dqn at 100k (difference -0.083 [-0.137, -0.025], "
+        "intervals overlap). With 2 rows, about 0.1 whose" in text
+    )
 
 
 def test_the_implementation_line_names_each_implementation_with_its_own_note():

@@ -26,6 +26,19 @@ TWINS = {jax: sb3 for sb3, jax in JAX_LEARNER.items()}
 PARTING_P = 0.05
 
 
+def agree_label(r: dict[str, Any]) -> str:
+    """The *agree* cell of a row of :func:`twin_agreement`: ``yes`` when the two intervals
+    overlap and the difference's interval holds 0; a row whose intervals overlap but whose
+    difference's interval excludes 0 says so (the overlap of two 95% intervals is the
+    weaker test); ``**no**`` when the intervals do not overlap."""
+    if not r["overlap"]:
+        return "**no**"
+    lo, hi = r["diff_ci"]
+    if lo <= 1e-12 and hi >= -1e-12:
+        return "yes"
+    return "intervals overlap; the difference's excludes 0"
+
+
 def twin_agreement(a: dict[str, Any], reps: int = 2000) -> list[dict[str, Any]]:
     """For each pair of :data:`TWINS` and each budget at which both ran every task: both
     learners' mean final SPL on the seeds both ran (95% stratified-bootstrap intervals), the
@@ -116,16 +129,19 @@ def twin_rows(rows: list[dict[str, Any]]) -> list[str]:
         "interval from resampling each learner's seeds within each task on its own, and the "
         f"tasks where an exact permutation test of the final scores gives p < {PARTING_P} "
         "(with 21 tasks, about one such task is expected by chance at that level). "
-        "*Agree*: the two intervals overlap. Where the SB3 learner's runs in the study are "
-        "on values of its own search, its earlier runs on the JAX learner's values, which "
-        "they replaced and which are kept beside the study (`docs/results/v2-replaced`), "
-        "stand in, and the row names them.",
+        "*Agree*: the two intervals overlap and the difference's interval holds 0 (a row "
+        "whose intervals overlap while the difference's interval excludes 0 says so: the "
+        "overlap of two 95% intervals is the weaker test). Where the SB3 learner's runs in "
+        "the study are on values of its own search, its earlier runs on the JAX learner's "
+        "values, which they replaced and which are kept beside the study "
+        "(`docs/results/v2-replaced`), stand in, and the row names them.",
         "",
         "| JAX | SB3 | budget | seeds | JAX mean | SB3 mean | difference | agree | tasks with "
         f"p < {PARTING_P} |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for r in (r for r in rows if "skipped" not in r):
+    shown = [r for r in rows if "skipped" not in r]
+    for r in shown:
         parting = "; ".join(
             f"{p['task']} ({p['jax']:.2f} vs {p['sb3']:.2f}, p {p['p']:.3f})" for p in r["parting"]
         )
@@ -138,8 +154,23 @@ def twin_rows(rows: list[dict[str, Any]]) -> list[str]:
             f"| {r['jax']} | {sb3} | {fmt_steps(r['budget'])} | {len(r['seeds'])} | "
             f"{fmt_ci(r['jax_mean'], r['jax_ci'])} | {fmt_ci(r['sb3_mean'], r['sb3_ci'])} | "
             f"{r['diff']:+.3f} [{r['diff_ci'][0]:+.3f}, {r['diff_ci'][1]:+.3f}] | "
-            f"{'yes' if r['overlap'] else '**no**'} | {parting or 'none'} |"
+            f"{agree_label(r)} | {parting or 'none'} |"
         )
+    apart = [r for r in shown if agree_label(r) != "yes"]
+    if apart:
+        L += [
+            "",
+            "**Where they part**: "
+            + "; ".join(
+                f"{r['jax']} against {r['sb3']} at {fmt_steps(r['budget'])} (difference "
+                f"{r['diff']:+.3f} [{r['diff_ci'][0]:+.3f}, {r['diff_ci'][1]:+.3f}], "
+                f"{'intervals apart' if not r['overlap'] else 'intervals overlap'})"
+                for r in apart
+            )
+            + f". With {len(shown)} rows, about {0.05 * len(shown):.1f} whose difference's "
+            "95% interval excludes 0 are expected by chance where the two implementations "
+            "agree; the tasks in the last column are where to look.",
+        ]
     skipped = [r for r in rows if "skipped" in r]
     if skipped:
         L += [
