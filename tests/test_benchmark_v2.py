@@ -733,3 +733,26 @@ def test_near_best_counts_the_candidates_within_one_run_of_the_best(tmp_path):
     f.write_text(json.dumps({"seeds": [], "tasks": ["a"], "trials": trials}))
     assert near_best(str(f)) is None
     assert near_best(str(tmp_path / "missing.json")) is None
+
+
+def test_v2_headline_names_a_set_in_progress_when_every_budget_ran(tmp_path):
+    """A set still under way beside a study in which every learner ran every budget (here a
+    search of SB3's own, its log directory) is named under the headline all the same."""
+    from sixaxis_avoid.benchmark.report_v2 import write_report_v2
+
+    suite_path, out = write_synthetic_study(tmp_path)
+    log_dir = tmp_path / "study-pending" / "sb3_tune-beta-10000"
+    (log_dir / "runs").mkdir(parents=True)
+    (log_dir / "study.json").write_text(json.dumps({
+        "command": "python -m sixaxis_avoid.benchmark.sb3_tune --learner beta --budget 10000",
+        "learners": ["beta"], "budget": 10000, "kind": "sb3_tune", "candidates": 3,
+        "seeds": [100, 101], "tasks": ["t1"], "runs": 6, "finished": False,
+        "wall_time_s_total": 1800.0}))  # fmt: skip
+    md = tmp_path / "BENCHMARKS.md"
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["missing_budgets"] == {} and len(a["in_progress"]) == 1
+    text = md.read_text()
+    assert "Not every learner ran at every budget" not in text
+    head = text.split("## Headline")[1].split("<!-- benchmark-headline:begin -->")[0]
+    assert head.count("In progress, committed part way beside the study") == 1
+    assert f"0 of 6 runs in `{log_dir}` (0.5 h of wall time so far)." in head

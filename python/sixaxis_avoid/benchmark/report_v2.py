@@ -567,6 +567,10 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                 "for the budgets run (*Tuning record*, *How to run*) with the budget changed."
                 + in_progress_sentence(a["in_progress"]),
             ]
+        elif a["in_progress"]:
+            # Every learner ran every budget, yet a set may still be under way (a search of
+            # SB3's own, a re-run on new values): the headline names it all the same.
+            L += ["", in_progress_sentence(a["in_progress"]).strip()]
         L += [
             "",
             f"<!-- {HEADLINE_SECTION}:begin -->",
