@@ -86,11 +86,11 @@ def _describe(p: dict[str, Any]) -> str:
 
 
 def in_progress_sentence(pending: list[dict[str, Any]]) -> str:
-    """The run sets in progress (:func:`sets_in_progress`), for the headline's "not run yet"."""
+    """The run sets in progress (:func:`sets_in_progress`): a paragraph under the headline."""
     if not pending:
         return ""
     return (
-        " In progress, committed part way beside the study and not in any figure until "
+        "In progress, committed part way beside the study and not in any figure until "
         "complete (the same command, in each directory's `study.json`, runs the rest): "
         + "; ".join(_describe(p) for p in pending)
         + "."

@@ -564,13 +564,12 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                     for lr, bs in a["missing_budgets"].items()
                 )
                 + ". Each is a tuning command and a run command per budget: those recorded "
-                "for the budgets run (*Tuning record*, *How to run*) with the budget changed."
-                + in_progress_sentence(a["in_progress"]),
+                "for the budgets run (*Tuning record*, *How to run*) with the budget changed.",
             ]
-        elif a["in_progress"]:
-            # Every learner ran every budget, yet a set may still be under way (a search of
-            # SB3's own, a re-run on new values): the headline names it all the same.
-            L += ["", in_progress_sentence(a["in_progress"]).strip()]
+        if a["in_progress"]:
+            # Its own paragraph: a set may be under way once every learner ran every budget
+            # too (a search of SB3's own, a re-run on new values).
+            L += ["", in_progress_sentence(a["in_progress"])]
         L += [
             "",
             f"<!-- {HEADLINE_SECTION}:begin -->",
