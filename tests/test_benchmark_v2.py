@@ -21,7 +21,7 @@ def v2():
 
 def test_v2_has_the_design_tasks_and_budget_axis(v2):
     assert v2.major_version == 2
-    assert v2.budgets["axis"] == [30000, 100000, 300000, 1000000]
+    assert v2.budgets["axis"] == [30000, 100000, 300000, 1000000, 3000000]
     assert len(v2.seeds) == 10
     ids = [t.id for t in v2.tasks]
     assert "paper_simple" in ids and "paper_complex" not in ids and "replan_clutter" in ids
@@ -106,9 +106,11 @@ def test_plan_runs_one_run_per_budget_with_the_budget_in_the_file_name(v2, tmp_p
     specs = plan_runs(
         v2, ["dqn", "bfs"], seeds=[0, 1], tasks=tasks, hyperparams=tmp_path / "none.json"
     )
+    # By default every budget of the axis but its best_only tail (3M: named when wanted).
     assert len(specs) == 2 * 2 * 2 * 4
     dqn = [s for s in specs if s["learner"] == "dqn"]
-    assert sorted({s["budget"] for s in dqn}) == v2.budgets["axis"]
+    assert sorted({s["budget"] for s in dqn}) == v2.budgets["axis"][:-1]
+    assert v2.budgets["best_only"] == [3000000]
     for s in dqn:  # the goal task gets the same total budget
         assert s["budget"] == s["budget_axis"] and s["checkpoints"][-1] == s["budget"]
         assert s["hyperparams_status"] == "untuned"  # no by_budget entry at all
@@ -119,6 +121,9 @@ def test_plan_runs_one_run_per_budget_with_the_budget_in_the_file_name(v2, tmp_p
     sub = plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[100000],
                     hyperparams=tmp_path / "none.json")  # fmt: skip
     assert [s["budget"] for s in sub] == [100000]
+    top = plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[3000000],
+                    hyperparams=tmp_path / "none.json")  # fmt: skip
+    assert [s["budget"] for s in top] == [3000000]
     with pytest.raises(ValueError, match="12345 is not on"):
         plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[12345])
     # v1 specs are unchanged: no axis, no budget in the file name.
@@ -364,6 +369,55 @@ def test_v2_headline_sits_where_every_ranked_learner_ran(tmp_path):
     a = write_report_v2(out, md, reps=100, suite=str(suite_path))
     assert a["headline"]["budget"] == 10000 and not a["headline"]["plateaued"]
     assert "The plateau is not shown" in md.read_text()
+
+
+def test_v2_best_only_budget_is_run_by_the_best_learners_alone(tmp_path):
+    """A budget the suite marks best_only (the axis's tail) is the best learners' plateau
+    check: a learner that is not among the best is not missing there, and its tuning row
+    there is not listed; a best learner that has not run it is."""
+    from sixaxis_avoid.benchmark.report_v2 import write_report_v2
+
+    suite_path, out = write_synthetic_study(tmp_path)
+    raw = json.loads(suite_path.read_text())
+    raw["budgets"]["best_only"] = [AXIS[-1]]
+    suite_path.write_text(json.dumps(raw))
+    for f in (out / "runs").glob("*__beta__*__b100000.json"):
+        f.unlink()
+    md = tmp_path / "BENCHMARKS.md"
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["common_budgets"] == [1000, 10000] and a["best"] == ["alpha"]
+    assert a["missing_budgets"] == {}
+    assert a["headline"]["budget"] == 10000 and a["headline"]["plateaued"]
+    text = md.read_text()
+    assert "Not run yet" not in text and "Not every learner ran at every budget" not in text
+    assert "| alpha | 100k |" in text and "| beta | 100k |" not in text
+    assert "`budgets.best_only`" in text  # Statistics says what the budget is for
+    assert "Budget axis (env steps): 1000, 10k, 100k (100k for the best learners only" in text
+    # Without alpha's runs there, the best learner has not run it: the page says so, and
+    # the headline stays at the last budget every ranked learner ran, not at the axis's end.
+    for f in (out / "runs").glob("*__alpha__*__b100000.json"):
+        f.unlink()
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["missing_budgets"] == {"alpha": [100000]}
+    assert a["headline"]["budget"] == 10000 and not a["headline"]["plateaued"]
+    text = md.read_text()
+    assert "Not run yet: alpha at 100k." in text
+    assert "the headline sits at the largest budget at which every ranked learner ran, 10k" in text
+
+
+def test_v2_best_only_must_be_the_axis_tail(tmp_path):
+    raw = json.loads(load_suite("v2").path.read_text())
+    for bad in ([30000], [1000000], raw["budgets"]["axis"]):
+        raw["budgets"]["best_only"] = bad
+        p = tmp_path / "s.json"
+        p.write_text(json.dumps(raw))
+        with pytest.raises(SuiteError, match=r"budgets\.best_only"):
+            load_suite(p)
+    raw["budgets"]["best_only"] = []
+    raw["budgets"]["axis"] = [100000, 30000]
+    p.write_text(json.dumps(raw))
+    with pytest.raises(SuiteError, match=r"budgets\.axis \[100000, 30000\]"):
+        load_suite(p)
 
 
 def test_v2_runs_line_names_seeds_per_learner_and_budget():

@@ -80,7 +80,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     )
     r.add_argument(
         "--budgets",
-        help="comma list of env-step budgets of the suite's axis (suite v2; default: all)",
+        help="comma list of env-step budgets of the suite's axis (suite v2; default: all "
+        "but the best_only ones, which only the best learners run: name them)",
     )
     r.add_argument(
         "--set",

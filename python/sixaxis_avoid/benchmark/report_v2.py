@@ -185,14 +185,22 @@ def analyse_v2(
     # A ranking compares learners at one budget, so the headline sits at a budget where
     # every ranked learner ran on every task: the plateau is looked for among those.
     common = [b for b in budgets if all(lr in per_budget[b]["complete"] for lr in ranked)]
-    missing = {
-        lr: [b for b in a["axis"] if b not in per_budget or lr not in per_budget[b]["complete"]]
-        for lr in ranked
-    }
-    missing = {lr: bs for lr, bs in missing.items() if bs}
     scope = common or budgets
     last = scope[-1]
     best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
+    # The suite's best_only budgets (the axis's tail) are for the best learners alone: the
+    # others are not missing there.
+    best_only = {int(b) for b in suite.budgets.get("best_only", [])}
+    missing = {
+        lr: [
+            b
+            for b in a["axis"]
+            if (b not in per_budget or lr not in per_budget[b]["complete"])
+            and (b not in best_only or lr in best)
+        ]
+        for lr in ranked
+    }
+    missing = {lr: bs for lr, bs in missing.items() if bs}
     # The plateau is the best learners' own: at the last budget every ranked learner ran, it
     # is checked against the next budget of the axis at which every best learner ran (the
     # others need not have). The headline never moves past that last common budget.
@@ -333,11 +341,14 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
         "files |",
         "|---|---|---|---|---|---|---|",
     ]
+    best_only = {int(b) for b in a["suite"].budgets.get("best_only", [])}
     for lr in learners:
         by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
         for b in a["axis"]:
             e = by.get(str(b))
             statuses = recorded.get((lr, b), set())
+            if e is None and not statuses and b in best_only and lr not in a.get("best", []):
+                continue  # a budget for the best learners only (*Statistics*)
             runs = ", ".join(sorted(statuses)) or "no runs"
             if e is None:
                 # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".
@@ -408,7 +419,10 @@ STATISTICS = [
     "its interval at this one. When not every learner ran every budget, the ranking stops "
     "at the largest budget all of them ran, and the plateau there is checked against the "
     "next budget at which every best learner ran. Without such a budget the headline sits "
-    "at the largest budget (all of them ran) and says the plateau is not shown.",
+    "at the largest budget (all of them ran) and says the plateau is not shown. The budgets "
+    "the suite marks for the best learners only (`budgets.best_only`, the axis's tail) are "
+    "run by the best learners at the budget before them and by no other: they show the "
+    "plateau there, and the ranking never reaches them.",
     "- **Performance profile**: the fraction of runs with SPL above τ, 95% band; "
     "**probability of improvement**: P(a run of the row learner scores higher than a run "
     "of the column learner on a task drawn at random), ties counting half (rliable).",
@@ -478,7 +492,12 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
     suite = a["suite"]
     rel = {k: os.path.relpath(v, out.parent) for k, v in figs.items()}
     hist = os.path.relpath(history, out.parent) if history else None
-    axis = ", ".join(fmt_steps(b) for b in a["axis"])
+    best_only = [int(b) for b in suite.budgets.get("best_only", [])]
+    axis = ", ".join(fmt_steps(b) for b in a["axis"]) + (
+        f" ({', '.join(fmt_steps(b) for b in best_only)} for the best learners only, *Statistics*)"
+        if best_only
+        else ""
+    )
     L = [
         "# Learner benchmark",
         "",
@@ -540,7 +559,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
         else:
             where = (
                 "the largest budget"
-                if not a["missing_budgets"] or not a["common_budgets"]
+                if b == a["axis"][-1] or not a["common_budgets"]
                 else "the largest budget at which every ranked learner ran"
             )
             L.append(

@@ -122,7 +122,8 @@ def plan_runs(
 ) -> list[dict[str, Any]]:
     """The specs of a study's runs: learners x tasks x seeds (``tag`` prefixes their result
     files, e.g. a tuning trial's number); on a suite with a budget axis (``budgets.axis``),
-    x budgets (``budgets``: a subset of the axis, default all of it), each run's
+    x budgets (``budgets``: a subset of the axis, default all of it but its ``best_only``
+    tail, the budgets only the best learners run and only when asked for), each run's
     ``budget`` one of them, except the paper's learner (family "paper": its episode count
     does not depend on the budget), planned once, at the largest budget chosen."""
     axis = suite.budgets.get("axis")
@@ -130,7 +131,8 @@ def plan_runs(
         raise ValueError(f"budgets {budgets}: suite {suite.name!r} has no budget axis")
     chosen: list[int | None] = [None]
     if axis is not None:
-        chosen = [int(b) for b in (axis if budgets is None else budgets)]
+        every = [b for b in axis if b not in suite.budgets.get("best_only", [])]
+        chosen = [int(b) for b in (every if budgets is None else budgets)]
         for b in chosen:
             if b not in axis:
                 raise ValueError(f"budgets: {b} is not on suite {suite.name!r}'s axis {axis}")

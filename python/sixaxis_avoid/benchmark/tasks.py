@@ -6,7 +6,10 @@ A suite is a JSON file (``suites/<name>.json`` in this package, or any path) wit
 - ``seeds``: the learners' seeds of a reported run (``0..N-1``).
 - ``budgets``: env steps per run (``deep`` for neural learners; ``native_episodes``, the
   tabular learner's episode cap, the paper's 10000) and ``checkpoints``, the number of greedy
-  evaluations on a geometric grid of env steps up to the budget.
+  evaluations on a geometric grid of env steps up to the budget. A suite with a budget axis
+  (v2) gives ``axis``, rising env-step budgets that every learner runs, and may mark its tail
+  ``best_only``: budgets that only the best learners at the last budget before them run, to
+  show their plateau (v2: 3M env steps after 1M).
 - ``algorithm2``: the re-plan caps of Algorithm 2 per learner family.
 - ``tasks``: the reported tasks; ``tuning``: tasks and seeds for ``benchmark tune``, which
   must be disjoint from the reported ones (checked).
@@ -292,6 +295,31 @@ def _task(x: Any, where: str) -> Task:
     return Task(id=x["id"], kind=kind, spec={k: v for k, v in x.items() if k not in ("id",)})
 
 
+def check_budget_axis(budgets: dict[str, Any], where: Path) -> None:
+    """A budget axis (``budgets.axis``) rises, and its ``budgets.best_only`` budgets are its
+    tail: budgets that only the best learners at the last budget before them run, to show
+    their plateau there (docs/BENCHMARKS.md, *Statistics*)."""
+    axis = budgets.get("axis")
+    if axis is None:
+        if "best_only" in budgets:
+            raise SuiteError(f"suite {where}: budgets.best_only needs budgets.axis")
+        return
+    if not axis or any(not isinstance(b, int) or b <= 0 for b in axis) or axis != sorted(set(axis)):
+        raise SuiteError(
+            f"suite {where}: budgets.axis {axis!r} must be rising positive env-step counts"
+        )
+    best_only = budgets.get("best_only", [])
+    if (
+        not isinstance(best_only, list)
+        or best_only != axis[len(axis) - len(best_only) :]
+        or (best_only and len(best_only) == len(axis))
+    ):
+        raise SuiteError(
+            f"suite {where}: budgets.best_only {best_only!r} must be the tail of "
+            f"budgets.axis {axis!r}, after at least one budget every learner runs"
+        )
+
+
 def load_suite(name_or_path: str | Path) -> Suite:
     """A suite by name (``quick``, ``v1``) or JSON path."""
     p = Path(name_or_path)
@@ -323,6 +351,7 @@ def load_suite(name_or_path: str | Path) -> Suite:
         path=p,
         raw=raw,
     )
+    check_budget_axis(suite.budgets, p)
     if suite.major_version >= 2:
         suite.check_distinct_worlds()
         suite.check_disjoint()
