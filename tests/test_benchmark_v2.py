@@ -393,6 +393,17 @@ def test_v2_best_only_budget_is_run_by_the_best_learners_alone(tmp_path):
     assert "| alpha | 100k |" in text and "| beta | 100k |" not in text
     assert "`budgets.best_only`" in text  # Statistics says what the budget is for
     assert "Budget axis (env steps): 1000, 10k, 100k (100k for the best learners only" in text
+    # alpha falls on paper_simple at 100k: not plateaued at 10k, and the page says where.
+    for f in (out / "runs").glob("paper_simple__alpha__*__b100000.json"):
+        r = json.loads(f.read_text())
+        r["result"]["score"] = r["result"]["success"] = 0.0
+        f.write_text(json.dumps(r))
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["headline"]["budget"] == 10000 and not a["headline"]["plateaued"]
+    text = md.read_text()
+    assert "the headline sits at the largest budget at which every ranked learner ran, 10k" in text
+    assert "At 10k: alpha's mean at 100k, 0.467, lies outside its interval here, 0.800 [" in text
+    assert "most of all on paper_simple (1.000 here, 0.000 there)." in text
     # Without alpha's runs there, the best learner has not run it: the page says so, and
     # the headline stays at the last budget every ranked learner ran, not at the axis's end.
     for f in (out / "runs").glob("*__alpha__*__b100000.json"):
@@ -403,6 +414,7 @@ def test_v2_best_only_budget_is_run_by_the_best_learners_alone(tmp_path):
     text = md.read_text()
     assert "Not run yet: alpha at 100k." in text
     assert "the headline sits at the largest budget at which every ranked learner ran, 10k" in text
+    assert "At 10k:" not in text  # no best learner ran past it: nothing to say where
 
 
 def test_v2_best_only_must_be_the_axis_tail(tmp_path):

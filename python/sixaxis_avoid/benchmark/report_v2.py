@@ -430,6 +430,48 @@ STATISTICS = [
 ]
 
 
+def plateau_detail(a: dict[str, Any], b: int) -> str:
+    """Where the plateau at ``b`` stands for each best learner: its mean SPL at the next
+    budget it ran, inside or outside its interval at ``b`` (outside: the task that moved
+    most), and those that ran no budget after ``b``. Empty when none of them did."""
+    best = (a.get("headline") or {}).get("best", [])
+    parts, not_run, later = [], [], set()
+    for lr in best:
+        here = a["per_budget"][b]["learners"].get(lr)
+        nb = next((x for x in a["budgets"] if x > b and lr in a["per_budget"][x]["learners"]), None)
+        if here is None or nb is None:
+            not_run.append(lr)
+            continue
+        later.add(nb)
+        there = a["per_budget"][nb]["learners"][lr]
+        lo, hi = here["mean_ci"]
+        inside = lo - 1e-12 <= there["mean"] <= hi + 1e-12
+        text = (
+            f"{lr}'s mean at {fmt_steps(nb)}, {there['mean']:.3f}, lies "
+            f"{'inside' if inside else 'outside'} its interval here, "
+            f"{fmt_ci(here['mean'], here['mean_ci'])}"
+        )
+        if not inside:
+            moved = {
+                t: there["per_task"][t]["mean"] - v["mean"]
+                for t, v in here["per_task"].items()
+                if t in there["per_task"]
+            }
+            t = max(moved, key=lambda k: abs(moved[k]))
+            text += (
+                f", most of all on {t} ({here['per_task'][t]['mean']:.3f} here, "
+                f"{there['per_task'][t]['mean']:.3f} there)"
+            )
+        parts.append(text)
+    if not parts:
+        return ""
+    if not_run:
+        who = " and ".join([", ".join(not_run[:-1]), not_run[-1]] if len(not_run) > 1 else not_run)
+        nxt = ", ".join(fmt_steps(x) for x in sorted(later))
+        parts.append(f"{who} {'has' if len(not_run) == 1 else 'have'} not run {nxt} yet")
+    return f"At {fmt_steps(b)}: " + "; ".join(parts) + "."
+
+
 def headline_table(a: dict[str, Any], b: int) -> list[str]:
     e = a["per_budget"][b]["learners"]
     rows = sorted((lr for lr in e if lr in a["ranked"]), key=lambda lr: -e[lr]["mean"])
@@ -569,6 +611,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                 + f" did every best learner ({', '.join(head['best']) if head else 'none'}) "
                 f"stay within its interval at the next budget, so the headline sits at {where}, "
                 f"{fmt_steps(b)}, and its figures are lower bounds."
+                + (f" {detail}" if (detail := plateau_detail(a, b)) else "")
             )  # fmt: skip
         if a["missing_budgets"]:
             L += [
