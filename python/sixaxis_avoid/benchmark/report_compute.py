@@ -1,8 +1,9 @@
-"""The v2 page's *Compute* section: what the study cost, per learner and budget, read from
-the tuning record's trials files and the run files (docs/BENCHMARKS.md, *Compute*).
+"""The v2 page's *Tuning record* and *Compute* sections: the hyperparameters each learner
+ran on at each budget, and what the study cost, per learner and budget, read from the tuning
+record's trials files and the run files (docs/BENCHMARKS.md, *Tuning record*, *Compute*).
 
-Entry point: :func:`compute_rows` (the section's lines, from :func:`report_v2.analyse_v2`'s
-analysis).
+Entry points: :func:`tuning_rows` and :func:`compute_rows` (each section's lines, from
+:func:`report_v2.analyse_v2`'s analysis).
 """
 
 from __future__ import annotations
@@ -164,4 +165,58 @@ def compute_rows(a: dict[str, Any]) -> list[str]:
                 + ".",
                 "",
             ]
+    return out
+
+
+def tuning_rows(a: dict[str, Any]) -> list[str]:
+    """The tuning record per learner and budget (``by_budget`` of the hyperparameter file),
+    beside the status the runs recorded."""
+    hp_name = a["suite"].raw.get("hyperparams", a["suite"].name)
+    data = hpmod.load(hp_name)
+    learners = list(
+        dict.fromkeys([*data.get("learners", {}), *[lr for lr in a.get("learners", [])]])
+    )
+    recorded: dict[tuple[str, int], set[str]] = {}
+    for r in a["runs"]:
+        key = (r["spec"]["learner"], stats.budget_of_run(r))
+        recorded.setdefault(key, set()).add(r["spec"].get("hyperparams_status", "n/a"))
+    out = [
+        f"Hyperparameter file: `{hpmod.display_path(data['path'])}`"
+        + ("" if Path(data["path"]).exists() else " (not written yet: no learner is tuned)")
+        + ". A run at budget B takes the values tuned at B; without them it runs with the "
+        "learner's defaults and is marked **untuned** (never values tuned at another budget). "
+        "*Near the best*: the candidates whose objective lies within one run's full score of "
+        "the best one's (1 / (seeds x tasks) of the search, the best included), out of all "
+        "scored; the search cannot tell them apart, so on the study's tasks its choice among "
+        "them may do better or worse than another of them.",
+        "",
+        "| learner | budget | status | trials | objective | near the best | status in the run "
+        "files |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    best_only = {int(b) for b in a["suite"].budgets.get("best_only", [])}
+    for lr in learners:
+        by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
+        for b in a["axis"]:
+            e = by.get(str(b))
+            statuses = recorded.get((lr, b), set())
+            if e is None and not statuses and b in best_only and lr not in a.get("best", []):
+                continue  # a budget for the best learners only (*Statistics*)
+            runs = ", ".join(sorted(statuses)) or "no runs"
+            if e is None:
+                # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".
+                status = "n/a" if statuses == {"n/a"} else "**untuned**"
+                out.append(f"| {lr} | {fmt_steps(b)} | {status} | — | — | — | {runs} |")
+                continue
+            obj = e.get("objective")
+            obj_s = f"{obj:.3f}" if isinstance(obj, (int, float)) else str(obj or "—")
+            trials = f"`{e['trials']}`" if e.get("trials") else "—"
+            near = near_best(e["trials"]) if e.get("trials") else None
+            near_s = f"{near[0]} of {near[1]}" if near else "—"
+            out.append(
+                f"| {lr} | {fmt_steps(b)} | {e.get('status', 'tuned')} | {trials} | {obj_s} "
+                f"| {near_s} | {runs} |"
+            )
+    if not learners:
+        out.append("| (none yet) | — | **untuned** | — | — | — | — |")
     return out

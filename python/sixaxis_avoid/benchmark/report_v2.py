@@ -22,10 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from sixaxis_avoid.benchmark import hyperparams as hpmod
 from sixaxis_avoid.benchmark import stats
 from sixaxis_avoid.benchmark._io import atomic_savefig, atomic_write_text
-from sixaxis_avoid.benchmark.report_compute import compute_rows, near_best
+from sixaxis_avoid.benchmark.report_compute import compute_rows, tuning_rows
 from sixaxis_avoid.benchmark.report_howto import how_to_run, report_command_v2
 from sixaxis_avoid.benchmark.report_pending import (
     in_progress_sentence,
@@ -313,60 +312,6 @@ def figures_v2(a: dict[str, Any], out_dir: Path) -> dict[str, Path]:
 
 # ------------------------------------------------------------------------------------------
 # Markdown
-
-
-def tuning_rows(a: dict[str, Any]) -> list[str]:
-    """The tuning record per learner and budget (``by_budget`` of the hyperparameter file),
-    beside the status the runs recorded."""
-    hp_name = a["suite"].raw.get("hyperparams", a["suite"].name)
-    data = hpmod.load(hp_name)
-    learners = list(
-        dict.fromkeys([*data.get("learners", {}), *[lr for lr in a.get("learners", [])]])
-    )
-    recorded: dict[tuple[str, int], set[str]] = {}
-    for r in a["runs"]:
-        key = (r["spec"]["learner"], stats.budget_of_run(r))
-        recorded.setdefault(key, set()).add(r["spec"].get("hyperparams_status", "n/a"))
-    out = [
-        f"Hyperparameter file: `{hpmod.display_path(data['path'])}`"
-        + ("" if Path(data["path"]).exists() else " (not written yet: no learner is tuned)")
-        + ". A run at budget B takes the values tuned at B; without them it runs with the "
-        "learner's defaults and is marked **untuned** (never values tuned at another budget). "
-        "*Near the best*: the candidates whose objective lies within one run's full score of "
-        "the best one's (1 / (seeds x tasks) of the search, the best included), out of all "
-        "scored; the search cannot tell them apart, so on the study's tasks its choice among "
-        "them may do better or worse than another of them.",
-        "",
-        "| learner | budget | status | trials | objective | near the best | status in the run "
-        "files |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    best_only = {int(b) for b in a["suite"].budgets.get("best_only", [])}
-    for lr in learners:
-        by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
-        for b in a["axis"]:
-            e = by.get(str(b))
-            statuses = recorded.get((lr, b), set())
-            if e is None and not statuses and b in best_only and lr not in a.get("best", []):
-                continue  # a budget for the best learners only (*Statistics*)
-            runs = ", ".join(sorted(statuses)) or "no runs"
-            if e is None:
-                # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".
-                status = "n/a" if statuses == {"n/a"} else "**untuned**"
-                out.append(f"| {lr} | {fmt_steps(b)} | {status} | — | — | — | {runs} |")
-                continue
-            obj = e.get("objective")
-            obj_s = f"{obj:.3f}" if isinstance(obj, (int, float)) else str(obj or "—")
-            trials = f"`{e['trials']}`" if e.get("trials") else "—"
-            near = near_best(e["trials"]) if e.get("trials") else None
-            near_s = f"{near[0]} of {near[1]}" if near else "—"
-            out.append(
-                f"| {lr} | {fmt_steps(b)} | {e.get('status', 'tuned')} | {trials} | {obj_s} "
-                f"| {near_s} | {runs} |"
-            )
-    if not learners:
-        out.append("| (none yet) | — | **untuned** | — | — | — | — |")
-    return out
 
 
 def tasks_rows(suite: Suite) -> list[str]:
