@@ -194,7 +194,7 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
         "files |",
         "|---|---|---|---|---|---|---|",
     ]
-    best_only = {int(b) for b in a["suite"].budgets.get("best_only", [])}
+    best_only = a["suite"].best_only
     for lr in learners:
         by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
         for b in a["axis"]:

@@ -189,7 +189,7 @@ def analyse_v2(
     best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
     # The suite's best_only budgets (the axis's tail) are for the best learners alone: the
     # others are not missing there.
-    best_only = {int(b) for b in suite.budgets.get("best_only", [])}
+    best_only = suite.best_only
     missing = {
         lr: [
             b
@@ -479,7 +479,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
     suite = a["suite"]
     rel = {k: os.path.relpath(v, out.parent) for k, v in figs.items()}
     hist = os.path.relpath(history, out.parent) if history else None
-    best_only = [int(b) for b in suite.budgets.get("best_only", [])]
+    best_only = suite.best_only
     axis = ", ".join(fmt_steps(b) for b in a["axis"]) + (
         f" ({', '.join(fmt_steps(b) for b in best_only)} for the best learners only, *Statistics*)"
         if best_only

@@ -131,7 +131,7 @@ def plan_runs(
         raise ValueError(f"budgets {budgets}: suite {suite.name!r} has no budget axis")
     chosen: list[int | None] = [None]
     if axis is not None:
-        every = [b for b in axis if b not in suite.budgets.get("best_only", [])]
+        every = [b for b in axis if b not in suite.best_only]
         chosen = [int(b) for b in (every if budgets is None else budgets)]
         for b in chosen:
             if b not in axis:

@@ -222,6 +222,12 @@ class Suite:
     path: Path
     raw: dict[str, Any]
 
+    @property
+    def best_only(self) -> list[int]:
+        """The budget axis's tail that only the best learners run (``budgets.best_only``, env
+        steps; empty without one)."""
+        return [int(b) for b in self.budgets.get("best_only", [])]
+
     def task(self, task_id: str) -> Task:
         for t in self.tasks + self.tuning_tasks:
             if t.id == task_id:
