@@ -389,8 +389,7 @@ def plateau_detail(a: dict[str, Any], b: int) -> str:
             continue
         later.add(nb)
         there = a["per_budget"][nb]["learners"][lr]
-        lo, hi = here["mean_ci"]
-        inside = lo - 1e-12 <= there["mean"] <= hi + 1e-12
+        inside = stats.plateaued(here, there)
         text = (
             f"{lr}'s mean at {fmt_steps(nb)}, {there['mean']:.3f}, lies "
             f"{'inside' if inside else 'outside'} its interval here, "
@@ -626,8 +625,7 @@ def markdown_v2(a: dict[str, Any], figs: dict[str, Path], out: Path, history: Pa
                 if i + 1 < len(a["budgets"]):
                     nxt = a["per_budget"][a["budgets"][i + 1]]["learners"].get(lr)
                     if nxt is not None:
-                        lo, hi = v["mean_ci"]
-                        mark = " ✓" if lo - 1e-12 <= nxt["mean"] <= hi + 1e-12 else " ✗"
+                        mark = " ✓" if stats.plateaued(v, nxt) else " ✗"
                 cells.append(fmt_ci(v["mean"], v["mean_ci"]) + mark)
             L.append(f"| {lr} | " + " | ".join(cells) + " |")
         if line := tuning_changes_line(tuning_changes(a)):

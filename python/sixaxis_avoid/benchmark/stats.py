@@ -428,6 +428,13 @@ def mean_ci(scores: np.ndarray, seed: int = 0, reps: int = REPS) -> tuple[float,
     return float(point["x"][0]), [float(ci["x"][0][0]), float(ci["x"][1][0])]
 
 
+def plateaued(here: dict[str, Any], there: dict[str, Any]) -> bool:
+    """A learner's mean SPL at the next budget (``there["mean"]``) lies inside its 95%
+    interval at this one (``here["mean_ci"]``): the plateau test of docs/BENCHMARKS.md."""
+    lo, hi = here["mean_ci"]
+    return bool(lo - 1e-12 <= there["mean"] <= hi + 1e-12)
+
+
 def headline_budget(
     by_budget: dict[int, dict[str, dict[str, Any]]], best: list[str]
 ) -> dict[str, Any]:
@@ -444,8 +451,7 @@ def headline_budget(
             if here is None or there is None:
                 rows[lr] = None
                 continue
-            lo, hi = here["mean_ci"]
-            rows[lr] = bool(lo - 1e-12 <= there["mean"] <= hi + 1e-12)
+            rows[lr] = plateaued(here, there)
         checks.append({"budget": b, "next": nxt, "within": rows})
         if rows and all(v is True for v in rows.values()):
             return {"budget": b, "plateaued": True, "checks": checks, "best": list(best)}
