@@ -358,3 +358,97 @@ def test_run_group_records_read_by_the_report(tmp_path):
     assert "jax_ppo" not in learners.BUILTIN  # the default study does not run it
     with pytest.raises(ValueError, match="differ in more than their seed"):
         jax_runs.run_group([specs[0], {**specs[1], "budget": 2048}])
+
+
+def test_a_group_trained_in_pieces_goes_on_from_its_saved_state(tmp_path, monkeypatch):
+    suite = load_suite("v2")
+    task = suite.tuning_tasks[3]  # the goal task: several evaluation targets
+    values = [
+        jax_learners.check_values("ppo", {**TINY_PPO, "learning_rate": lr}) for lr in (1e-3, 3e-3)
+    ]
+    comp = jax_learners.Compiled("ppo", task, values[0], 4096, [512, 1024, 4096])
+    whole = comp.run(values, [0, 1])
+    assert whole["resumes"] == 0
+    # 64 iterations in pieces of at most 64 / 7 -> 10, and a save after every one.
+    monkeypatch.setattr(jax_learners, "STATE_EVERY_S", 0.0)
+    monkeypatch.setattr(jax_learners, "STATE_PIECES", 7)
+    state = tmp_path / "g.state.npz"
+    pieces = comp.run(values, [0, 1], state=state, ident="a")
+    assert pieces["resumes"] == 0 and not state.exists()  # gone once the group is done
+
+    # A stop in the third piece (the first of the last checkpoint's segment) keeps the state.
+    advance, calls = comp._pieces["advance"], []
+
+    def stopping(*args):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return advance(*args)
+
+    comp._pieces["advance"] = stopping
+    with pytest.raises(KeyboardInterrupt):
+        comp.run(values, [0, 1], state=state, ident="a")
+    assert state.exists()
+    comp._pieces["advance"] = lambda *args: calls.append(1) or advance(*args)
+    calls.clear()
+    again = comp.run(values, [0, 1], state=state, ident="a")
+    # It went on from the state after 2 pieces: 7 pieces in all (segments of 8, 8 and 48
+    # iterations in pieces of 8, 8, 10, 10, 10, 10, 8), 5 of them left.
+    assert again["resumes"] == 1 and len(calls) == 5 and not state.exists()
+    assert again["train_cpu_s"] > 0
+    for key in whole["out"]:
+        assert np.array_equal(pieces["out"][key], again["out"][key]), key
+    same = jax.tree_util.tree_map(
+        lambda x, y: np.array_equal(np.asarray(x), np.asarray(y)), pieces["params"], again["params"]
+    )
+    assert all(jax.tree_util.tree_leaves(same))
+    # The pieces train what one call trains, up to float rounding.
+    close = jax.tree_util.tree_map(
+        lambda x, y: np.allclose(np.asarray(x), np.asarray(y), atol=1e-5),
+        whole["params"],
+        pieces["params"],
+    )
+    assert all(jax.tree_util.tree_leaves(close))
+
+    # A state saved by another training (another ident) is not gone on from.
+    comp._pieces["advance"] = stopping
+    calls.clear()
+    with pytest.raises(KeyboardInterrupt):
+        comp.run(values, [0, 1], state=state, ident="a")
+    comp._pieces["advance"] = lambda *args: calls.append(1) or advance(*args)
+    calls.clear()
+    other = comp.run(values, [0, 1], state=state, ident="b")
+    assert other["resumes"] == 0 and len(calls) == 7
+
+
+def test_search_with_save_state_gives_its_groups_a_state_file_and_an_identity_apart(
+    tmp_path, monkeypatch
+):
+    seen = []
+    monkeypatch.setattr(
+        jax_learners, "train_group", lambda *job: seen.append(job) or {"stub": True}
+    )
+    task = load_suite("v2").tuning_tasks[0]
+    values = [jax_learners.check_values("ppo", TINY_PPO)]
+    parts = tmp_path / "parts"
+    job = ("ppo", task, values, [0], 512, [512])
+    plain_path, plain = jax_learners.group_part(parts, job)
+    piece_path, piece = jax_learners.group_part(parts, job, pieces=True)
+    assert plain != piece and plain_path != piece_path
+
+    def dispatch(jobs):
+        for k, j in enumerate(jobs):
+            seen.append(j)
+            yield k, {"env_steps": [512], "success": [[0.0]], "spl": [[0.0]],
+                      **dict.fromkeys(("compile_s", "train_wall_s", "train_cpu_s",
+                                       "group_wall_s", "group_cpu_s"), 0.0)}  # fmt: skip
+
+    jax_learners.train_candidates("ppo", [task], values, [0], 512, [512], parts=parts,
+                                  dispatch=dispatch, save_state=True)  # fmt: skip
+    (j,) = seen
+    assert j[:6] == job and j[6] == (str(piece_path.resolve().with_suffix(".state.npz")), piece)
+    assert piece_path.exists()  # the outcome, saved under the pieces' identity
+    seen.clear()
+    jax_learners.train_candidates("ppo", [task], values, [0], 512, [512], parts=parts,
+                                  dispatch=dispatch)  # fmt: skip
+    assert seen[0] == job  # one call, no state; the pieces' outcome is not read for it

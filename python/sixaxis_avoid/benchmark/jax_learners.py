@@ -307,17 +307,15 @@ class Compiled:
         segments = np.diff([0, *iters]).astype(np.int32)
         evaluate = self.evaluator()
 
-        def train_one(fields: dict[str, Any], key: Any) -> Any:
+        def algo_of(fields: dict[str, Any]) -> Any:
             f = dict(fields)
             mes = f.pop("max_episode_steps").astype(jnp.int32)
-            a = base.replace(env_params=base.env_params._replace(max_steps_in_episode=mes), **f)
-            ts = a.init_state(key)
+            return base.replace(env_params=base.env_params._replace(max_steps_in_episode=mes), **f)
 
-            def segment(ts: Any, n: Any) -> Any:
-                ts = jax.lax.fori_loop(0, n, lambda _, t: a.train_iteration(t), ts)
-                return ts, evaluate(a, ts)
+        def advance(a: Any, ts: Any, n: Any) -> Any:
+            return jax.lax.fori_loop(0, n, lambda _, t: a.train_iteration(t), ts)
 
-            ts, ev = jax.lax.scan(segment, ts, jnp.asarray(segments))
+        def finish(a: Any, ts: Any, ev: Any) -> Any:
             es = ts.env_state
             first = jnp.where(es.first_step >= 0, (es.first_step - 1) * a.num_envs, -1)
             first = jnp.where(
@@ -337,6 +335,52 @@ class Compiled:
             }
             return out, self.policy_params(ts)
 
+        def train_one(fields: dict[str, Any], key: Any) -> Any:
+            a = algo_of(fields)
+            ts = a.init_state(key)
+
+            def segment(ts: Any, n: Any) -> Any:
+                ts = advance(a, ts, n)
+                return ts, evaluate(a, ts)
+
+            ts, ev = jax.lax.scan(segment, ts, jnp.asarray(segments))
+            return finish(a, ts, ev)
+
+        def batched(f: Any, inner: tuple[Any, ...], outer: tuple[Any, ...], **jit: Any) -> Any:
+            return jax.jit(jax.vmap(jax.vmap(f, in_axes=inner), in_axes=outer), **jit)
+
+        # The same training in pieces, for a group whose state is saved as it trains
+        # (:meth:`run` with ``state``): the state after init, after n more iterations, the
+        # evaluation at a checkpoint and the outcome. Each piece traces the same calls as
+        # ``train_one``, so the pieces give the same numbers (tests/test_jax_learners.py).
+        # A state crosses between pieces as its leaves (arrays): its static fields (the
+        # optimiser's functions, which close over traced knobs) are rebuilt in each piece
+        # from a fresh state's structure (its arrays are unused, and compiled away).
+        leaves = jax.tree_util.tree_leaves
+
+        def state_of(a: Any, ls: list[Any]) -> Any:
+            fresh = a.init_state(jax.random.PRNGKey(0))
+            return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(fresh), ls)
+
+        def advance_piece(f: Any, ls: list[Any], n: Any) -> Any:
+            a = algo_of(f)
+            return leaves(advance(a, state_of(a, ls), n))
+
+        def evaluate_piece(f: Any, ls: list[Any]) -> Any:
+            a = algo_of(f)
+            return evaluate(a, state_of(a, ls))
+
+        def finish_piece(f: Any, ls: list[Any], ev: Any) -> Any:
+            a = algo_of(f)
+            return finish(a, state_of(a, ls), ev)
+
+        self._pieces = {
+            "init": batched(lambda f, k: leaves(algo_of(f).init_state(k)), (None, 0), (0, None)),
+            "advance": batched(advance_piece, (None, 0, None), (0, 0, None), donate_argnums=(1,)),
+            "evaluate": batched(evaluate_piece, (None, 0), (0, 0)),
+            "finish": batched(finish_piece, (None, 0, 0), (0, 0, 0)),
+        }
+        self.segments = [int(n) for n in segments]
         self._train = jax.jit(jax.vmap(jax.vmap(train_one, in_axes=(None, 0)), in_axes=(0, None)))
         self._executables: dict[tuple[int, int], Any] = {}
 
@@ -433,13 +477,31 @@ class Compiled:
         self._roll = roll
         return roll
 
-    def run(self, candidates: list[dict[str, Any]], seeds: list[int]) -> dict[str, Any]:
-        """Train every candidate (this group's static values) on every seed in one call."""
+    def run(
+        self,
+        candidates: list[dict[str, Any]],
+        seeds: list[int],
+        state: str | Path | None = None,
+        ident: str = "",
+    ) -> dict[str, Any]:
+        """Train every candidate (this group's static values) on every seed in one call.
+
+        With ``state`` (a file path), the training runs in pieces of at most 1/
+        :data:`STATE_PIECES` of its iterations, and its state (every candidate's and seed's
+        nets, optimiser, env and random key, and the evaluations so far) is saved there at
+        most every :data:`STATE_EVERY_S` seconds of training and at the checkpoints. A
+        call that finds a state saved by the same training (``ident``, the candidates,
+        seeds, checkpoints and pieces) goes on from it, so a group stopped midway loses at
+        most those seconds; the file goes once the group is done. The outcome is the same
+        as without ``state``; ``train_wall_s`` and ``train_cpu_s`` add up every call's
+        training, and ``resumes`` counts the calls that went on from a saved state."""
         jax = require("jax", "rejax learners")
         jnp = jax.numpy
         fields = [traced_fields(self.algo, c) for c in candidates]
         batch = {k: jnp.asarray([f[k] for f in fields], jnp.float32) for k in fields[0]}
         keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds))
+        if state is not None:
+            return self._run_in_pieces(candidates, seeds, batch, keys, Path(state), ident)
         t0 = time.perf_counter()
         shape = (len(candidates), len(seeds))
         if shape not in self._executables:  # compiled once per (candidates, seeds) shape
@@ -450,15 +512,155 @@ class Compiled:
         out, params = compiled(batch, keys)
         out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        return self._outcome(out, params, len(candidates) * len(seeds), compile_s, wall, cpu, 0)
+
+    def _outcome(
+        self,
+        out: Any,
+        params: Any,
+        runs: int,
+        compile_s: float,
+        wall: float,
+        cpu: float,
+        resumes: int,
+    ) -> dict[str, Any]:
         return {
             "out": out,  # arrays (C, S, ...)
             "params": params,
             "compile_s": compile_s,
             "train_wall_s": wall,
             "train_cpu_s": cpu,
+            "resumes": resumes,
             "env_steps": self.env_steps,
-            "env_steps_per_s": len(candidates) * len(seeds) * self.env_steps[-1] / wall,
+            "env_steps_per_s": runs * self.env_steps[-1] / wall,
         }
+
+    def _run_in_pieces(
+        self,
+        candidates: list[dict[str, Any]],
+        seeds: list[int],
+        batch: dict[str, Any],
+        keys: Any,
+        state: Path,
+        ident: str,
+    ) -> dict[str, Any]:
+        """:meth:`run` with ``state``: the pieces, saving and resuming the training state."""
+        import hashlib
+
+        jax = require("jax", "rejax learners")
+        jnp = jax.numpy
+        pieces = self._pieces
+        chunk = max(1, -(-sum(self.segments) // STATE_PIECES))
+        mark = hashlib.sha256(
+            json.dumps(
+                [ident, candidates, list(seeds), self.segments, chunk, self.iteration_steps],
+                sort_keys=True,
+                default=str,
+            ).encode()
+        ).hexdigest()
+        t0 = time.perf_counter()
+        ts = jax.block_until_ready(pieces["init"](batch, keys))  # the state's leaves
+        compile_s = time.perf_counter() - t0  # mostly compiling (init itself is quick)
+        saved = load_state(state, mark, ts)
+        k, done, evs, wall0, cpu0, resumes = 0, 0, [], 0.0, 0.0, 0
+        if saved is not None:
+            meta, arrays = saved
+            ts = [jnp.asarray(x) for x in arrays]
+            k, done, wall0, cpu0 = meta["segment"], meta["done"], meta["wall_s"], meta["cpu_s"]
+            evs = [tuple(np.asarray(x) for x in e) for e in meta["evaluations"]]
+            resumes = meta["resumes"] + 1
+        t0, c0 = time.perf_counter(), time.process_time()
+        last_save = t0
+
+        def save() -> None:
+            meta = {
+                "mark": mark,
+                "segment": k,
+                "done": done,
+                "evaluations": [[x.tolist() for x in e] for e in evs],
+                "wall_s": wall0 + time.perf_counter() - t0,
+                "cpu_s": cpu0 + time.process_time() - c0,
+                "resumes": resumes,
+            }
+            save_state(state, meta, ts)
+
+        while k < len(self.segments):
+            while done < self.segments[k]:
+                n = min(chunk, self.segments[k] - done)
+                ts = jax.block_until_ready(pieces["advance"](batch, ts, jnp.int32(n)))
+                done += n
+                if time.perf_counter() - last_save >= STATE_EVERY_S:
+                    save()
+                    last_save = time.perf_counter()
+            evs.append(tuple(np.asarray(x) for x in pieces["evaluate"](batch, ts)))
+            k, done = k + 1, 0
+            if k < len(self.segments):
+                save()
+                last_save = time.perf_counter()
+        ev = tuple(jnp.asarray(np.stack([e[i] for e in evs], axis=2)) for i in range(len(evs[0])))
+        out, params = pieces["finish"](batch, ts, ev)
+        out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
+        wall, cpu = wall0 + time.perf_counter() - t0, cpu0 + time.process_time() - c0
+        state.unlink(missing_ok=True)
+        runs = len(candidates) * len(seeds)
+        return self._outcome(out, params, runs, compile_s, wall, cpu, resumes)
+
+
+#: A group trained with a saved state (:meth:`Compiled.run`) runs in pieces of at most
+#: 1/STATE_PIECES of its training iterations ...
+STATE_PIECES = 50
+#: ... and saves its state after a piece once this many seconds of training have passed
+#: since the last save (and at every checkpoint).
+STATE_EVERY_S = 300.0
+
+
+def save_state(path: Path, meta: dict[str, Any], leaves: list[Any]) -> None:
+    """Write a training state (``leaves``: the arrays of its pytree, in order; ``meta``:
+    plain JSON) to ``path`` (``.npz``), whole or not at all (a temporary file, then a
+    rename)."""
+    import os
+    import tempfile
+
+    jax = require("jax", "rejax learners")
+    arrays = {}
+    for i, x in enumerate(leaves):
+        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):
+            x = jax.random.key_data(x)
+        arrays[f"leaf{i}"] = np.asarray(x)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, meta=np.asarray(json.dumps(meta)), **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def load_state(path: Path, mark: str, like: list[Any]) -> tuple[dict[str, Any], list[Any]] | None:
+    """The state :func:`save_state` wrote at ``path``, as ``(meta, leaves)``, if it carries
+    ``mark`` and its arrays have the shapes and types of ``like`` (the leaves of a fresh
+    state); else None (a state from another training, or none)."""
+    jax = require("jax", "rejax learners")
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+            arrays = [z[f"leaf{i}"] for i in range(len(like))] if meta.get("mark") == mark else []
+    except (OSError, ValueError, KeyError):
+        return None
+    if meta.get("mark") != mark:
+        return None
+    out = []
+    for x, y in zip(arrays, like):
+        if jax.dtypes.issubdtype(y.dtype, jax.dtypes.prng_key):
+            x = jax.random.wrap_key_data(x, impl=jax.random.key_impl(y))
+        if x.shape != y.shape or x.dtype != y.dtype:
+            return None
+        out.append(x)
+    return meta, out
 
 
 _GROUPS: dict[str, Compiled] = {}
@@ -495,15 +697,27 @@ def train_group(
     seeds: list[int],
     budget: int,
     checkpoints: list[int],
+    state: tuple[str, str] | None = None,
 ) -> dict[str, Any]:
     """Train one group (candidates of equal :data:`STATIC` values) x ``seeds`` on ``task``
     in one compiled call: the per-candidate curves (``success``, ``spl``: C lists of S lists,
     one value per checkpoint), the checkpoints' ``env_steps``, and the timing (seconds):
     ``compile_s``, ``train_wall_s``, ``train_cpu_s`` and the whole group's ``group_wall_s``
-    and ``group_cpu_s``. Plain JSON values, so a Ray worker can return it."""
+    and ``group_cpu_s``. Plain JSON values, so a Ray worker can return it.
+
+    ``state``: ``(path, ident)``, where the training saves its state as it goes and goes on
+    from a state saved there by the same group (:meth:`Compiled.run`); the earlier calls'
+    training time counts in the group's, and ``resumes`` counts them."""
     t0, c0 = time.perf_counter(), time.process_time()
     comp = compiled_group(algo, task, members[0], budget, checkpoints)
-    r = comp.run(members, seeds)
+    if state is None:
+        r = comp.run(members, seeds)
+    else:
+        r = comp.run(members, seeds, state=state[0], ident=state[1])
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    # Training done by earlier calls on a saved state (its time is in r's train times).
+    earlier_wall = max(0.0, r["train_wall_s"] - wall)
+    earlier_cpu = max(0.0, r["train_cpu_s"] - cpu)
     return {
         "env_steps": [int(x) for x in r["env_steps"]],
         "success": r["out"]["success"].tolist(),
@@ -511,8 +725,9 @@ def train_group(
         "compile_s": r["compile_s"],
         "train_wall_s": r["train_wall_s"],
         "train_cpu_s": r["train_cpu_s"],
-        "group_wall_s": time.perf_counter() - t0,
-        "group_cpu_s": time.process_time() - c0,
+        "resumes": int(r["resumes"]),
+        "group_wall_s": wall + earlier_wall,
+        "group_cpu_s": cpu + earlier_cpu,
     }
 
 
@@ -550,9 +765,14 @@ def candidate_rows(
     }
 
 
-#: One group to train: ``(algo, task, members, seeds, budget, checkpoints)``, the arguments
-#: of :func:`train_group`.
-GroupJob = tuple[str, Any, list[dict[str, Any]], list[int], int, list[int]]
+#: One group to train: ``(algo, task, members, seeds, budget, checkpoints[, state])``, the
+#: arguments of :func:`train_group`.
+GroupJob = tuple[Any, ...]
+
+#: The suffix of a group's saved training state beside its outcome's file in ``parts``
+#: (:func:`train_candidates`); not committed (.gitignore): it is large, and only the
+#: machine that trains the group reads it.
+STATE_SUFFIX = ".state.npz"
 
 
 def train_in_process(jobs: list[GroupJob]) -> Any:
@@ -571,6 +791,7 @@ def train_candidates(
     parts: Path | None = None,
     dispatch: Any = None,
     log: Any = None,
+    save_state: bool = False,
 ) -> dict[str, list[dict[str, Any]]]:
     """Train every candidate (a values dict) x every seed on each of ``tasks`` for
     ``budget`` env steps: one compiled, vmapped call per task and group of equal
@@ -586,7 +807,12 @@ def train_candidates(
     With ``parts`` (a directory), each group's outcome is saved there as it finishes, and a
     group whose saved outcome matches (same task, candidates, seeds, budget, checkpoints and
     versions of jax and rejax: :func:`group_part`) is read back instead of trained again, so a
-    long search stopped midway resumes where it stopped."""
+    long search stopped midway resumes where it stopped. With ``save_state`` too, a group
+    trains in pieces and saves its state there as it goes (:data:`STATE_SUFFIX`,
+    :meth:`Compiled.run`), so a stop loses minutes of it, not the whole group, on a machine
+    (or shared file system) that keeps the file. Pieces give the same numbers whatever the
+    stops, but not bit for bit those of one call (float rounding differs across the
+    compiled pieces), so the mode is part of a group's identity (:func:`group_part`)."""
     checked = [check_values(algo, c) for c in candidates]
     checkpoints = checkpoints or [budget]
     groups = candidate_groups(algo, checked)
@@ -596,11 +822,14 @@ def train_candidates(
     for task in tasks:
         for g, idx in enumerate(groups):
             job = (algo, task, [checked[i] for i in idx], seeds, budget, checkpoints)
-            path, ident = (None, None) if parts is None else group_part(Path(parts), job)
+            pieces = save_state and parts is not None
+            path, ident = (None, None) if parts is None else group_part(Path(parts), job, pieces)
             saved = saved_group(path, ident)
             if saved is not None:
                 rows[task.id].update(candidate_rows(checked, idx, g, saved, True, path))
             else:
+                if pieces and path is not None:  # absolute: a Ray worker's cwd differs
+                    job = (*job, (str(path.resolve().with_suffix(STATE_SUFFIX)), ident))
                 jobs.append(job)
                 where.append((task, g, path, ident))
     for k, outcome in (dispatch or train_in_process)(jobs):
@@ -614,15 +843,15 @@ def train_candidates(
     return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
 
 
-def group_part(parts: Path, job: GroupJob) -> tuple[Path, str]:
+def group_part(parts: Path, job: GroupJob, pieces: bool = False) -> tuple[Path, str]:
     """Where :func:`train_candidates` saves one group's outcome (``job``: the arguments of
     :func:`train_group`), and the identity (a sha256) a saved outcome must carry to be read
     back: the algorithm, the task (id, kind, spec), the group's checked values, the seeds,
-    the budget (env steps), the checkpoints
-    and the versions of jax and rejax."""
+    the budget (env steps), the checkpoints, the versions of jax and rejax, and with
+    ``pieces`` the pieces' size (a group trained in pieces with a saved state)."""
     import hashlib
 
-    algo, task, members, seeds, budget, checkpoints = job
+    algo, task, members, seeds, budget, checkpoints = job[:6]
     versions = {}
     for pkg in ("jax", "rejax"):
         try:
@@ -631,7 +860,8 @@ def group_part(parts: Path, job: GroupJob) -> tuple[Path, str]:
             versions[pkg] = None
     blob = json.dumps(
         [algo, task.id, task.kind, task.spec, members, list(seeds), int(budget),
-         [int(c) for c in checkpoints], versions],
+         [int(c) for c in checkpoints], versions]
+        + ([{"pieces": STATE_PIECES}] if pieces else []),
         sort_keys=True,
         default=str,
     )  # fmt: skip

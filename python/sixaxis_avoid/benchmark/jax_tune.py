@@ -26,7 +26,10 @@ trained at once, vmapped, on the suite's tuning tasks::
   times add up the groups' own, wherever they ran; the parts go once it is written. The
   directory's ``study.json`` is the search's manifest (:func:`search_manifest`), so a
   search committed part way under ``docs/results/v2-pending`` is named on the page as a set
-  in progress.
+  in progress. With ``--save-state``, a group also saves its training state there
+  (``*.state.npz``, not committed) at least every few minutes and goes on from it when
+  run again, so a long group (hours at 3M env steps) stopped midway is not lost; see
+  :meth:`jax_learners.Compiled.run`.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
   ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
@@ -129,6 +132,7 @@ def tune(
     log: Any = None,
     parts: Path | None = None,
     dispatch: Any = None,
+    save_state: bool = False,
 ) -> dict[str, Any]:
     """Train every candidate on every tuning task and seed; score and rank them.
 
@@ -146,7 +150,7 @@ def tune(
     t0 = time.perf_counter()
     per_task = jl.train_candidates(
         algo, tasks, candidates, seeds, budget, suite.checkpoints(budget),
-        parts=parts, dispatch=dispatch, log=log,
+        parts=parts, dispatch=dispatch, log=log, save_state=save_state,
     )  # fmt: skip
     timing: list[dict[str, Any]] = []
     groups_all: list[dict[str, Any]] = []
@@ -338,6 +342,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default=1,
         help="with --address: CPUs each group reserves (capped at the largest node's)",
     )
+    p.add_argument(
+        "--save-state",
+        action="store_true",
+        help="train each group in pieces and save its state in --parts as it goes, so a "
+        "stop loses minutes of a group rather than all of it (float rounding differs from "
+        "one-call training, so its groups' outcomes are saved apart from those)",
+    )
     a = p.parse_args(argv)
     if a.group_cpus < 1:
         p.error(f"--group-cpus: {a.group_cpus} must be >= 1")
@@ -384,6 +395,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             a.algo, suite, a.budget, candidates, seeds, tasks,
             log=lambda m: (print(m, file=sys.stderr), progress()), parts=parts,
             dispatch=ray_dispatch(a.group_cpus) if a.address else None,
+            save_state=a.save_state,
         )  # fmt: skip
     finally:
         if started:
