@@ -377,7 +377,7 @@ def test_a_group_trained_in_pieces_goes_on_from_its_saved_state(tmp_path, monkey
     assert pieces["resumes"] == 0 and not state.exists()  # gone once the group is done
 
     # A stop in the third piece (the first of the last checkpoint's segment) keeps the state.
-    advance, calls = comp._pieces["advance"], []
+    advance, calls = comp._piece_executables[(2, 2)]["advance"], []
 
     def stopping(*args):
         calls.append(1)
@@ -385,11 +385,11 @@ def test_a_group_trained_in_pieces_goes_on_from_its_saved_state(tmp_path, monkey
             raise KeyboardInterrupt
         return advance(*args)
 
-    comp._pieces["advance"] = stopping
+    comp._piece_executables[(2, 2)]["advance"] = stopping
     with pytest.raises(KeyboardInterrupt):
         comp.run(values, [0, 1], state=state, ident="a")
     assert state.exists()
-    comp._pieces["advance"] = lambda *args: calls.append(1) or advance(*args)
+    comp._piece_executables[(2, 2)]["advance"] = lambda *args: calls.append(1) or advance(*args)
     calls.clear()
     again = comp.run(values, [0, 1], state=state, ident="a")
     # It went on from the state after 2 pieces: 7 pieces in all (segments of 8, 8 and 48
@@ -411,11 +411,11 @@ def test_a_group_trained_in_pieces_goes_on_from_its_saved_state(tmp_path, monkey
     assert all(jax.tree_util.tree_leaves(close))
 
     # A state saved by another training (another ident) is not gone on from.
-    comp._pieces["advance"] = stopping
+    comp._piece_executables[(2, 2)]["advance"] = stopping
     calls.clear()
     with pytest.raises(KeyboardInterrupt):
         comp.run(values, [0, 1], state=state, ident="a")
-    comp._pieces["advance"] = lambda *args: calls.append(1) or advance(*args)
+    comp._piece_executables[(2, 2)]["advance"] = lambda *args: calls.append(1) or advance(*args)
     calls.clear()
     other = comp.run(values, [0, 1], state=state, ident="b")
     assert other["resumes"] == 0 and len(calls) == 7

@@ -381,6 +381,7 @@ class Compiled:
             "finish": batched(finish_piece, (None, 0, 0), (0, 0, 0)),
         }
         self.segments = [int(n) for n in segments]
+        self._piece_executables: dict[tuple[int, int], dict[str, Any]] = {}
         self._train = jax.jit(jax.vmap(jax.vmap(train_one, in_axes=(None, 0)), in_axes=(0, None)))
         self._executables: dict[tuple[int, int], Any] = {}
 
@@ -559,8 +560,17 @@ class Compiled:
             ).encode()
         ).hexdigest()
         t0 = time.perf_counter()
-        ts = jax.block_until_ready(pieces["init"](batch, keys))  # the state's leaves
-        compile_s = time.perf_counter() - t0  # mostly compiling (init itself is quick)
+        shape = (len(candidates), len(seeds))
+        if shape not in self._piece_executables:  # compiled once per shape, as in one call
+            ts = jax.eval_shape(pieces["init"], batch, keys)
+            self._piece_executables[shape] = {
+                "init": pieces["init"].lower(batch, keys).compile(),
+                "advance": pieces["advance"].lower(batch, ts, jnp.int32(1)).compile(),
+                "evaluate": pieces["evaluate"].lower(batch, ts).compile(),
+            }
+        ex = self._piece_executables[shape]
+        ts = jax.block_until_ready(ex["init"](batch, keys))  # the state's leaves
+        compile_s = time.perf_counter() - t0
         saved = load_state(state, mark, ts)
         k, done, evs, wall0, cpu0, resumes = 0, 0, [], 0.0, 0.0, 0
         if saved is not None:
@@ -587,12 +597,12 @@ class Compiled:
         while k < len(self.segments):
             while done < self.segments[k]:
                 n = min(chunk, self.segments[k] - done)
-                ts = jax.block_until_ready(pieces["advance"](batch, ts, jnp.int32(n)))
+                ts = jax.block_until_ready(ex["advance"](batch, ts, jnp.int32(n)))
                 done += n
                 if time.perf_counter() - last_save >= STATE_EVERY_S:
                     save()
                     last_save = time.perf_counter()
-            evs.append(tuple(np.asarray(x) for x in pieces["evaluate"](batch, ts)))
+            evs.append(tuple(np.asarray(x) for x in ex["evaluate"](batch, ts)))
             k, done = k + 1, 0
             if k < len(self.segments):
                 save()
