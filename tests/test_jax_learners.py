@@ -452,3 +452,38 @@ def test_search_with_save_state_gives_its_groups_a_state_file_and_an_identity_ap
     jax_learners.train_candidates("ppo", [task], values, [0], 512, [512], parts=parts,
                                   dispatch=dispatch)  # fmt: skip
     assert seen[0] == job  # one call, no state; the pieces' outcome is not read for it
+
+
+def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, monkeypatch):
+    monkeypatch.setattr(jax_tune, "space", lambda algo, rng: (
+        TINY_PPO, {"learning_rate": float(rng.uniform(1e-4, 3e-3))}))  # fmt: skip
+    monkeypatch.setattr(jax_learners, "STATE_EVERY_S", 0.0)
+    argv = [
+        "--algo", "ppo", "--suite", "v2", "--tasks", "tune-gen-easy-1000", "--budget", "1024",
+        "--trials", "2", "--seeds", "2", "--groups", "1", "--save-state",
+    ]  # fmt: skip
+    whole = jax_tune.main([*argv, "--out", str(tmp_path / "a" / "t.json"),
+                           "--hyperparams", str(tmp_path / "a" / "hp.json")])  # fmt: skip
+    assert whole["per_task_timing"][0]["state_resumes"] == 0
+
+    # A stop right after the group's second save: its state is kept beside the parts.
+    save, saves = jax_learners.save_state, []
+
+    def save_then_stop(*args):
+        save(*args)
+        saves.append(1)
+        if len(saves) == 2:
+            raise KeyboardInterrupt
+
+    pdir = tmp_path / "parts"
+    argv = [*argv, "--parts", str(pdir), "--out", str(tmp_path / "b" / "t.json"),
+            "--hyperparams", str(tmp_path / "b" / "hp.json")]  # fmt: skip
+    monkeypatch.setattr(jax_learners, "save_state", save_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        jax_tune.main(argv)
+    assert [p.name[-10:] for p in pdir.glob("*--*")] == [".state.npz"]
+    monkeypatch.setattr(jax_learners, "save_state", save)
+    again = jax_tune.main(argv)
+    assert again["per_task_timing"][0]["state_resumes"] == 1
+    assert_same_trials(whole, again)
+    assert not pdir.exists()  # the state goes with its group, the parts with the search

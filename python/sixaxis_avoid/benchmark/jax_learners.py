@@ -768,6 +768,7 @@ def candidate_rows(
             "success": outcome["success"][j],
             "spl": outcome["spl"][j],
             "resumed": resumed,
+            "state_resumes": int(outcome.get("resumes", 0)),
             "part": None if path is None else str(path),
             **{k: outcome[k] for k in keys},
         }

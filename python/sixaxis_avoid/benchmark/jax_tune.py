@@ -163,6 +163,8 @@ def tune(
                 "wall_s": sum(r["group_wall_s"] for r in groups),
                 "compile_s": sum(r["compile_s"] for r in groups),
                 "train_wall_s": sum(r["train_wall_s"] for r in groups),
+                # calls that went on from a group's saved state (--save-state)
+                "state_resumes": sum(r["state_resumes"] for r in groups),
             }
         )
     resumed = [r for r in groups_all if r["resumed"]]
