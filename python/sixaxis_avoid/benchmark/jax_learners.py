@@ -352,7 +352,8 @@ class Compiled:
         # The same training in pieces, for a group whose state is saved as it trains
         # (:meth:`run` with ``state``): the state after init, after n more iterations, the
         # evaluation at a checkpoint and the outcome. Each piece traces the same calls as
-        # ``train_one``, so the pieces give the same numbers (tests/test_jax_learners.py).
+        # ``train_one``: the same training, whose numbers equal one call's up to float
+        # rounding (compiled apart, the pieces round differently; tests/test_jax_learners.py).
         # A state crosses between pieces as its leaves (arrays): its static fields (the
         # optimiser's functions, which close over traced knobs) are rebuilt in each piece
         # from a fresh state's structure (its arrays are unused, and compiled away).
@@ -494,8 +495,9 @@ class Compiled:
         call that finds a state saved by the same training (``ident``, the candidates,
         seeds, checkpoints and pieces) goes on from it, so a group stopped midway loses at
         most those seconds; the file goes once the group is done. The outcome is the same
-        as without ``state``; ``train_wall_s`` and ``train_cpu_s`` add up every call's
-        training, and ``resumes`` counts the calls that went on from a saved state."""
+        whatever the stops, and equals that of one call (without ``state``) up to float
+        rounding; ``train_wall_s`` and ``train_cpu_s`` add up every call's training, and
+        ``resumes`` counts the calls that went on from a saved state."""
         jax = require("jax", "rejax learners")
         jnp = jax.numpy
         fields = [traced_fields(self.algo, c) for c in candidates]
@@ -710,8 +712,9 @@ def train_group(
     state: tuple[str, str] | None = None,
 ) -> dict[str, Any]:
     """Train one group (candidates of equal :data:`STATIC` values) x ``seeds`` on ``task``
-    in one compiled call: the per-candidate curves (``success``, ``spl``: C lists of S lists,
-    one value per checkpoint), the checkpoints' ``env_steps``, and the timing (seconds):
+    in one compiled call (or in pieces, with ``state``): the per-candidate curves
+    (``success``, ``spl``: C lists of S lists, one value per checkpoint), the checkpoints'
+    ``env_steps``, and the timing (seconds):
     ``compile_s``, ``train_wall_s``, ``train_cpu_s`` and the whole group's ``group_wall_s``
     and ``group_cpu_s``. Plain JSON values, so a Ray worker can return it.
 
