@@ -15,6 +15,7 @@ from gymnasium.error import DependencyNotInstalled
 from sixaxis_avoid.benchmark import (
     jax_learners,
     jax_runs,
+    jax_state,
     jax_tune,
     learners,
     report,
@@ -370,8 +371,8 @@ def test_a_group_trained_in_pieces_goes_on_from_its_saved_state(tmp_path, monkey
     whole = comp.run(values, [0, 1])
     assert whole["resumes"] == 0
     # 64 iterations in pieces of at most 64 / 7 -> 10, and a save after every one.
-    monkeypatch.setattr(jax_learners, "STATE_EVERY_S", 0.0)
-    monkeypatch.setattr(jax_learners, "STATE_PIECES", 7)
+    monkeypatch.setattr(jax_state, "STATE_EVERY_S", 0.0)
+    monkeypatch.setattr(jax_state, "STATE_PIECES", 7)
     state = tmp_path / "g.state.npz"
     pieces = comp.run(values, [0, 1], state=state, ident="a")
     assert pieces["resumes"] == 0 and not state.exists()  # gone once the group is done
@@ -457,7 +458,7 @@ def test_search_with_save_state_gives_its_groups_a_state_file_and_an_identity_ap
 def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, monkeypatch):
     monkeypatch.setattr(jax_tune, "space", lambda algo, rng: (
         TINY_PPO, {"learning_rate": float(rng.uniform(1e-4, 3e-3))}))  # fmt: skip
-    monkeypatch.setattr(jax_learners, "STATE_EVERY_S", 0.0)
+    monkeypatch.setattr(jax_state, "STATE_EVERY_S", 0.0)
     argv = [
         "--algo", "ppo", "--suite", "v2", "--tasks", "tune-gen-easy-1000", "--budget", "1024",
         "--trials", "2", "--seeds", "2", "--groups", "1", "--save-state",
@@ -467,7 +468,7 @@ def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, mon
     assert whole["per_task_timing"][0]["state_resumes"] == 0
 
     # A stop right after the group's second save: its state is kept beside the parts.
-    save, saves = jax_learners.save_state, []
+    save, saves = jax_state.save_state, []
 
     def save_then_stop(*args):
         save(*args)
@@ -478,11 +479,11 @@ def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, mon
     pdir = tmp_path / "parts"
     argv = [*argv, "--parts", str(pdir), "--out", str(tmp_path / "b" / "t.json"),
             "--hyperparams", str(tmp_path / "b" / "hp.json")]  # fmt: skip
-    monkeypatch.setattr(jax_learners, "save_state", save_then_stop)
+    monkeypatch.setattr(jax_state, "save_state", save_then_stop)
     with pytest.raises(KeyboardInterrupt):
         jax_tune.main(argv)
     assert [p.name[-10:] for p in pdir.glob("*--*")] == [".state.npz"]
-    monkeypatch.setattr(jax_learners, "save_state", save)
+    monkeypatch.setattr(jax_state, "save_state", save)
     again = jax_tune.main(argv)
     assert again["per_task_timing"][0]["state_resumes"] == 1
     assert_same_trials(whole, again)

@@ -60,6 +60,7 @@ LAYERS = [
     # The JAX learners build on the learners and the runner's records; the runner reaches
     # them through the learner class (learners.PLUGINS), not by import.
     "sixaxis_avoid.benchmark.jax_values",
+    "sixaxis_avoid.benchmark.jax_state",
     "sixaxis_avoid.benchmark.jax_learners",
     "sixaxis_avoid.benchmark.jax_runs",
     "sixaxis_avoid.benchmark.jax_tune",

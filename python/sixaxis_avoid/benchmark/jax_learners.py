@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from sixaxis_avoid._deps import require
+from sixaxis_avoid.benchmark import jax_state
 from sixaxis_avoid.benchmark._io import atomic_write_text
 from sixaxis_avoid.benchmark.jax_values import (  # re-exported: the learners' public names
     ACTIVATIONS,
@@ -489,15 +490,16 @@ class Compiled:
         """Train every candidate (this group's static values) on every seed in one call.
 
         With ``state`` (a file path), the training runs in pieces of at most 1/
-        :data:`STATE_PIECES` of its iterations, and its state (every candidate's and seed's
-        nets, optimiser, env and random key, and the evaluations so far) is saved there at
-        most every :data:`STATE_EVERY_S` seconds of training and at the checkpoints. A
-        call that finds a state saved by the same training (``ident``, the candidates,
-        seeds, checkpoints and pieces) goes on from it, so a group stopped midway loses at
-        most those seconds; the file goes once the group is done. The outcome is the same
-        whatever the stops, and equals that of one call (without ``state``) up to float
-        rounding; ``train_wall_s`` and ``train_cpu_s`` add up every call's training, and
-        ``resumes`` counts the calls that went on from a saved state."""
+        :data:`jax_state.STATE_PIECES` of its iterations (:func:`jax_state.train_in_pieces`),
+        and its state (every candidate's and seed's nets, optimiser, env and random key, and
+        the evaluations so far) is saved there at most every :data:`jax_state.STATE_EVERY_S`
+        seconds of training and at the checkpoints. A call that finds a state saved by the
+        same training (``ident``, the candidates, seeds, checkpoints and pieces) goes on from
+        it, so a group stopped midway loses at most those seconds; the file goes once the
+        group is done. The outcome is the same whatever the stops, and equals that of one
+        call (without ``state``) up to float rounding; ``train_wall_s`` and ``train_cpu_s``
+        add up every call's training, and ``resumes`` counts the calls that went on from a
+        saved state."""
         jax = require("jax", "rejax learners")
         jnp = jax.numpy
         fields = [traced_fields(self.algo, c) for c in candidates]
@@ -553,7 +555,7 @@ class Compiled:
         jax = require("jax", "rejax learners")
         jnp = jax.numpy
         pieces = self._pieces
-        chunk = max(1, -(-sum(self.segments) // STATE_PIECES))
+        chunk = max(1, -(-sum(self.segments) // jax_state.STATE_PIECES))
         mark = hashlib.sha256(
             json.dumps(
                 [ident, candidates, list(seeds), self.segments, chunk, self.iteration_steps],
@@ -573,106 +575,11 @@ class Compiled:
         ex = self._piece_executables[shape]
         ts = jax.block_until_ready(ex["init"](batch, keys))  # the state's leaves
         compile_s = time.perf_counter() - t0
-        saved = load_state(state, mark, ts)
-        k, done, evs, wall0, cpu0, resumes = 0, 0, [], 0.0, 0.0, 0
-        if saved is not None:
-            meta, arrays = saved
-            ts = [jnp.asarray(x) for x in arrays]
-            k, done, wall0, cpu0 = meta["segment"], meta["done"], meta["wall_s"], meta["cpu_s"]
-            evs = [tuple(np.asarray(x) for x in e) for e in meta["evaluations"]]
-            resumes = meta["resumes"] + 1
-        t0, c0 = time.perf_counter(), time.process_time()
-        last_save = t0
-
-        def save() -> None:
-            meta = {
-                "mark": mark,
-                "segment": k,
-                "done": done,
-                "evaluations": [[x.tolist() for x in e] for e in evs],
-                "wall_s": wall0 + time.perf_counter() - t0,
-                "cpu_s": cpu0 + time.process_time() - c0,
-                "resumes": resumes,
-            }
-            save_state(state, meta, ts)
-
-        while k < len(self.segments):
-            while done < self.segments[k]:
-                n = min(chunk, self.segments[k] - done)
-                ts = jax.block_until_ready(ex["advance"](batch, ts, jnp.int32(n)))
-                done += n
-                if time.perf_counter() - last_save >= STATE_EVERY_S:
-                    save()
-                    last_save = time.perf_counter()
-            evs.append(tuple(np.asarray(x) for x in ex["evaluate"](batch, ts)))
-            k, done = k + 1, 0
-            if k < len(self.segments):
-                save()
-                last_save = time.perf_counter()
-        ev = tuple(jnp.asarray(np.stack([e[i] for e in evs], axis=2)) for i in range(len(evs[0])))
-        out, params = pieces["finish"](batch, ts, ev)
-        out = jax.tree_util.tree_map(np.asarray, jax.block_until_ready(out))
-        wall, cpu = wall0 + time.perf_counter() - t0, cpu0 + time.process_time() - c0
-        state.unlink(missing_ok=True)
+        out, params, wall, cpu, resumes = jax_state.train_in_pieces(
+            ex, pieces["finish"], batch, ts, self.segments, chunk, state, mark
+        )
         runs = len(candidates) * len(seeds)
         return self._outcome(out, params, runs, compile_s, wall, cpu, resumes)
-
-
-#: A group trained with a saved state (:meth:`Compiled.run`) runs in pieces of at most
-#: 1/STATE_PIECES of its training iterations ...
-STATE_PIECES = 50
-#: ... and saves its state after a piece once this many seconds of training have passed
-#: since the last save (and at every checkpoint).
-STATE_EVERY_S = 300.0
-
-
-def save_state(path: Path, meta: dict[str, Any], leaves: list[Any]) -> None:
-    """Write a training state (``leaves``: the arrays of its pytree, in order; ``meta``:
-    plain JSON) to ``path`` (``.npz``), whole or not at all (a temporary file, then a
-    rename)."""
-    import os
-    import tempfile
-
-    jax = require("jax", "rejax learners")
-    arrays = {}
-    for i, x in enumerate(leaves):
-        if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key):
-            x = jax.random.key_data(x)
-        arrays[f"leaf{i}"] = np.asarray(x)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, meta=np.asarray(json.dumps(meta)), **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def load_state(path: Path, mark: str, like: list[Any]) -> tuple[dict[str, Any], list[Any]] | None:
-    """The state :func:`save_state` wrote at ``path``, as ``(meta, leaves)``, if it carries
-    ``mark`` and its arrays have the shapes and types of ``like`` (the leaves of a fresh
-    state); else None (a state from another training, or none)."""
-    jax = require("jax", "rejax learners")
-    if not path.exists():
-        return None
-    try:
-        with np.load(path) as z:
-            meta = json.loads(str(z["meta"]))
-            arrays = [z[f"leaf{i}"] for i in range(len(like))] if meta.get("mark") == mark else []
-    except (OSError, ValueError, KeyError):
-        return None
-    if meta.get("mark") != mark:
-        return None
-    out = []
-    for x, y in zip(arrays, like):
-        if jax.dtypes.issubdtype(y.dtype, jax.dtypes.prng_key):
-            x = jax.random.wrap_key_data(x, impl=jax.random.key_impl(y))
-        if x.shape != y.shape or x.dtype != y.dtype:
-            return None
-        out.append(x)
-    return meta, out
 
 
 _GROUPS: dict[str, Compiled] = {}
@@ -783,11 +690,6 @@ def candidate_rows(
 #: arguments of :func:`train_group`.
 GroupJob = tuple[Any, ...]
 
-#: The suffix of a group's saved training state beside its outcome's file in ``parts``
-#: (:func:`train_candidates`); not committed (.gitignore): it is large, and only the
-#: machine that trains the group reads it.
-STATE_SUFFIX = ".state.npz"
-
 
 def train_in_process(jobs: list[GroupJob]) -> Any:
     """:func:`train_candidates`' default ``dispatch``: the jobs one after another, here."""
@@ -822,7 +724,7 @@ def train_candidates(
     group whose saved outcome matches (same task, candidates, seeds, budget, checkpoints and
     versions of jax and rejax: :func:`group_part`) is read back instead of trained again, so a
     long search stopped midway resumes where it stopped. With ``save_state`` too, a group
-    trains in pieces and saves its state there as it goes (:data:`STATE_SUFFIX`,
+    trains in pieces and saves its state there as it goes (:data:`jax_state.STATE_SUFFIX`,
     :meth:`Compiled.run`), so a stop loses minutes of it, not the whole group, on a machine
     (or shared file system) that keeps the file. Pieces give the same numbers whatever the
     stops, but not bit for bit those of one call (float rounding differs across the
@@ -843,7 +745,8 @@ def train_candidates(
                 rows[task.id].update(candidate_rows(checked, idx, g, saved, True, path))
             else:
                 if pieces and path is not None:  # absolute: a Ray worker's cwd differs
-                    job = (*job, (str(path.resolve().with_suffix(STATE_SUFFIX)), ident))
+                    state = path.resolve().with_suffix(jax_state.STATE_SUFFIX)
+                    job = (*job, (str(state), ident))
                 jobs.append(job)
                 where.append((task, g, path, ident))
     for k, outcome in (dispatch or train_in_process)(jobs):
@@ -875,7 +778,7 @@ def group_part(parts: Path, job: GroupJob, pieces: bool = False) -> tuple[Path, 
     blob = json.dumps(
         [algo, task.id, task.kind, task.spec, members, list(seeds), int(budget),
          [int(c) for c in checkpoints], versions]
-        + ([{"pieces": STATE_PIECES}] if pieces else []),
+        + ([{"pieces": jax_state.STATE_PIECES}] if pieces else []),
         sort_keys=True,
         default=str,
     )  # fmt: skip
