@@ -4,6 +4,7 @@ a tiny PPO run of two vmapped seeds gives the JSON record the docs read."""
 from __future__ import annotations
 
 import importlib
+import io
 import json
 import sys
 
@@ -290,6 +291,23 @@ def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypa
     assert man["wall_time_s_total"] > 0
     (p,) = report_pending.sets_in_progress(tmp_path / "study")
     assert (p["kind"], p["made"], p["of"], p["budgets"]) == ("jax_tune", 2, 4, [512])
+    # --status reads the same progress from the files, training and writing nothing.
+    before = {f.name: f.read_bytes() for f in pdir.iterdir()}
+    calls.clear()
+    st = jax_tune.main([*argv, "--out", str(out), "--hyperparams", str(hp), "--status"])
+    assert calls == [] and {f.name: f.read_bytes() for f in pdir.iterdir()} == before
+    assert [(r["task"], r["group"], r["status"]) for r in st["groups"]] == [
+        ("tune-gen-easy-1000", 0, "done"),
+        ("tune-gen-easy-1000", 1, "done"),
+        ("tune-gen-medium-1001", 0, "not started"),
+        ("tune-gen-medium-1001", 1, "not started"),
+    ]
+    assert (st["done"], st["not_started"], st["other_files"]) == (2, 2, 0)
+    assert st["cpu_s"] == pytest.approx(sum(r["cpu_s"] for r in st["groups"][:2]))
+    assert st["cpu_s"] > 0
+    # Asked in the other mode, the same files are not this search's groups, and it says so.
+    other = jax_tune.main([*argv, "--out", str(out), "--save-state", "--status"])
+    assert (other["done"], other["not_started"], other["other_files"]) == (0, 4, 2)
     assert (
         "the JAX search for jax_ppo at 512 (4 candidates x 2 seeds x 2 tuning tasks), 2 of 4 "
         f"compiled groups in `{pdir}`" in report_pending.in_progress_sentence([p])
@@ -483,6 +501,16 @@ def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, mon
     with pytest.raises(KeyboardInterrupt):
         jax_tune.main(argv)
     assert [p.name[-10:] for p in pdir.glob("*--*")] == [".state.npz"]
+    st = jax_tune.main([*argv, "--status"])
+    (g,) = st["groups"]
+    # --status reads how far the stopped group got from its state, without its arrays.
+    assert (g["status"], g["checkpoints"], g["resumes"]) == ("saved part way", 12, 0)
+    assert g["checkpoints_done"] * 1000 + g["iterations_past"] > 0 and g["cpu_s"] > 0
+    if g["checkpoints_done"]:
+        assert g["env_steps"] == load_suite("v2").checkpoints(1024)[g["checkpoints_done"] - 1]
+    buf = io.StringIO()
+    jax_tune.print_status(st, buf)
+    assert "1 compiled groups in" in buf.getvalue() and "saved part way" in buf.getvalue()
     monkeypatch.setattr(jax_state, "save_state", save)
     again = jax_tune.main(argv)
     assert again["per_task_timing"][0]["state_resumes"] == 1

@@ -37,6 +37,7 @@ here.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib.metadata
 import json
 import time
@@ -549,33 +550,73 @@ def train_candidates(
     compiled pieces), so the mode is part of a group's identity (:func:`group_part`)."""
     checked = [check_values(algo, c) for c in candidates]
     checkpoints = checkpoints or [budget]
-    groups = candidate_groups(algo, checked)
     rows: dict[str, dict[int, dict[str, Any]]] = {t.id: {} for t in tasks}
     jobs: list[GroupJob] = []
-    where: list[tuple[Any, int, Path | None, str | None]] = []
+    where: list[PlannedGroup] = []
+    for p in plan_groups(algo, tasks, checked, seeds, budget, checkpoints, parts, save_state):
+        saved = saved_group(p.part, p.ident)
+        if saved is not None:
+            rows[p.task.id].update(candidate_rows(checked, p.members, p.group, saved, True,
+                                                  p.part))  # fmt: skip
+        else:
+            job = p.job if p.state is None else (*p.job, (str(p.state), p.ident))
+            jobs.append(job)
+            where.append(p)
+    for k, outcome in (dispatch or train_in_process)(jobs):
+        p = where[k]
+        out = {"ident": p.ident, **outcome}
+        if p.part is not None:
+            atomic_write_text(p.part, json.dumps(out) + "\n")
+        rows[p.task.id].update(candidate_rows(checked, p.members, p.group, out, False, p.part))
+        if log:
+            log(f"{p.task.id} group {p.group}: {out['group_wall_s']:.0f} s")
+    return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
+
+
+@dataclasses.dataclass(frozen=True)
+class PlannedGroup:
+    """One compiled group of a search or a run (:func:`plan_groups`): its ``task``, its index
+    ``group`` among the task's groups, the candidates' indices (``members``), the arguments
+    of :func:`train_group` (``job``), the file of its outcome (``part``) and the identity
+    that file must carry (``ident``), both None without ``parts``, and the file of its
+    training state (``state``, absolute: a Ray worker's cwd differs) when it trains in
+    pieces, else None."""
+
+    task: Any
+    group: int
+    members: list[int]
+    job: GroupJob
+    part: Path | None
+    ident: str | None
+    state: Path | None
+
+
+def plan_groups(
+    algo: str,
+    tasks: list[Any],
+    checked: list[dict[str, Any]],
+    seeds: list[int],
+    budget: int,
+    checkpoints: list[int],
+    parts: Path | None = None,
+    save_state: bool = False,
+) -> list[PlannedGroup]:
+    """The compiled groups that :func:`train_candidates` trains for these arguments
+    (``checked``: the candidates' checked values), task by task, each group in order of
+    :func:`candidate_groups`; nothing is trained or read. ``jax_tune --status`` reads a
+    search's progress from it."""
+    out = []
+    pieces = save_state and parts is not None
+    groups = candidate_groups(algo, checked)
     for task in tasks:
         for g, idx in enumerate(groups):
             job = (algo, task, [checked[i] for i in idx], seeds, budget, checkpoints)
-            pieces = save_state and parts is not None
             path, ident = (None, None) if parts is None else group_part(Path(parts), job, pieces)
-            saved = saved_group(path, ident)
-            if saved is not None:
-                rows[task.id].update(candidate_rows(checked, idx, g, saved, True, path))
-            else:
-                if pieces and path is not None:  # absolute: a Ray worker's cwd differs
-                    state = path.resolve().with_suffix(jax_state.STATE_SUFFIX)
-                    job = (*job, (str(state), ident))
-                jobs.append(job)
-                where.append((task, g, path, ident))
-    for k, outcome in (dispatch or train_in_process)(jobs):
-        task, g, path, ident = where[k]
-        out = {"ident": ident, **outcome}
-        if path is not None:
-            atomic_write_text(path, json.dumps(out) + "\n")
-        rows[task.id].update(candidate_rows(checked, groups[g], g, out, False, path))
-        if log:
-            log(f"{task.id} group {g}: {out['group_wall_s']:.0f} s")
-    return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
+            state = None
+            if pieces and path is not None:
+                state = path.resolve().with_suffix(jax_state.STATE_SUFFIX)
+            out.append(PlannedGroup(task, g, idx, job, path, ident, state))
+    return out
 
 
 def group_part(parts: Path, job: GroupJob, pieces: bool = False) -> tuple[Path, str]:

@@ -1,8 +1,9 @@
 """A JAX learner's group trained in pieces with its state saved as it goes, so that a long
 group (hours of one core at 3M env steps) stopped midway goes on from where it was:
 :func:`train_in_pieces` runs the pieces, :func:`save_state` and :func:`load_state` write and
-read the state. :meth:`jax_learners.Compiled.run` (with ``state``) compiles the pieces and
-calls it; ``jax_tune --save-state`` asks for it (docs/PERFORMANCE.md, *Tuning*).
+read the state, and :func:`state_meta` reads how far it got. :meth:`jax_learners.Compiled.run`
+(with ``state``) compiles the pieces and calls it; ``jax_tune --save-state`` asks for it
+(docs/PERFORMANCE.md, *Tuning*).
 """
 
 from __future__ import annotations
@@ -75,6 +76,20 @@ def load_state(path: Path, mark: str, like: list[Any]) -> tuple[dict[str, Any], 
             return None
         out.append(x)
     return meta, out
+
+
+def state_meta(path: Path) -> dict[str, Any] | None:
+    """The plain-JSON part of the state :func:`save_state` wrote at ``path`` (its arrays are
+    not read), or None if there is none or it cannot be read: ``segment``, the checkpoints
+    evaluated; ``done``, the training iterations since the last of them; ``evaluations``;
+    ``wall_s`` and ``cpu_s``, the training's seconds so far; ``resumes``; ``mark``. Needs no
+    JAX."""
+    try:
+        with np.load(path) as z:
+            meta = json.loads(str(z["meta"]))
+    except (OSError, ValueError, KeyError):
+        return None
+    return meta if isinstance(meta, dict) else None
 
 
 def train_in_pieces(

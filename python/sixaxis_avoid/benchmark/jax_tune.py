@@ -29,7 +29,8 @@ trained at once, vmapped, on the suite's tuning tasks::
   in progress. With ``--save-state``, a group also saves its training state there
   (``*.state.npz``, not committed) at least every few minutes and goes on from it when
   run again, so a long group (hours at 3M env steps) stopped midway is not lost; see
-  :meth:`jax_learners.Compiled.run`.
+  :meth:`jax_learners.Compiled.run`. ``--status`` with the search's own flags prints how
+  far it got (each group done, saved part way or not started) and trains nothing.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
   ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
@@ -251,6 +252,112 @@ def search_manifest(
     return write
 
 
+def search_status(
+    algo: str,
+    tasks: list[Any],
+    candidates: list[dict[str, Any]],
+    seeds: list[int],
+    budget: int,
+    checkpoints: list[int],
+    parts: Path,
+    save_state: bool = False,
+) -> dict[str, Any]:
+    """How far the search of these arguments got in ``parts``, read from its files; nothing
+    is trained or written. ``groups``: one entry per compiled group, task by task
+    (:func:`jax_learners.plan_groups`), with ``task``, ``group``, ``candidates`` and
+    ``status``:
+
+    - ``"done"``: its outcome is saved; ``cpu_s`` and ``wall_s`` are its own (seconds).
+    - ``"saved part way"`` (a ``save_state`` search): its training state is saved, with
+      ``checkpoints_done`` of ``checkpoints`` evaluated (the last at ``env_steps``, the
+      requested env steps of that checkpoint), ``iterations_past`` training iterations
+      since, ``resumes``, and its training's ``cpu_s`` and ``wall_s`` so far.
+    - ``"not started"``: neither.
+
+    ``other_files`` counts the outcome and state files in ``parts`` that belong to none of
+    these groups (another search, or the other mode of ``save_state``)."""
+    from sixaxis_avoid.benchmark import jax_state
+
+    checked = [jl.check_values(algo, c) for c in candidates]
+    planned = jl.plan_groups(algo, tasks, checked, seeds, budget, checkpoints, parts,
+                             save_state)  # fmt: skip
+    rows = []
+    for p in planned:
+        row: dict[str, Any] = {"task": p.task.id, "group": p.group,
+                               "candidates": len(p.members)}  # fmt: skip
+        saved = jl.saved_group(p.part, p.ident)
+        meta = None if saved or p.state is None else jax_state.state_meta(p.state)
+        if saved is not None:
+            row.update(status="done", cpu_s=saved["group_cpu_s"], wall_s=saved["group_wall_s"])
+        elif meta is not None:
+            k = int(meta["segment"])
+            row.update(
+                status="saved part way",
+                checkpoints_done=k,
+                checkpoints=len(checkpoints),
+                env_steps=int(checkpoints[k - 1]) if k else 0,
+                iterations_past=int(meta["done"]),
+                resumes=int(meta["resumes"]),
+                cpu_s=float(meta["cpu_s"]),
+                wall_s=float(meta["wall_s"]),
+            )
+        else:
+            row["status"] = "not started"
+        rows.append(row)
+    mine = {f for p in planned for f in (p.part, p.state) if f is not None}
+    mine = {f.resolve() for f in mine}
+    other = [
+        f
+        for f in (
+            sorted(parts.glob("*--*.json")) + sorted(parts.glob("*" + jax_state.STATE_SUFFIX))
+        )
+        if f.resolve() not in mine
+    ]
+    count = {s: sum(r["status"] == s for r in rows) for s in ("done", "saved part way",
+                                                              "not started")}  # fmt: skip
+    return {
+        "parts": str(parts),
+        "groups": rows,
+        **{k.replace(" ", "_"): v for k, v in count.items()},
+        "cpu_s": sum(r.get("cpu_s", 0.0) for r in rows),
+        "other_files": len(other),
+    }
+
+
+def print_status(st: dict[str, Any], file: Any = None) -> None:
+    """:func:`search_status` as a table (``jax_tune --status``)."""
+    from sixaxis_avoid.benchmark.stats import fmt_steps
+
+    out = file or sys.stdout
+    n = len(st["groups"])
+    print(
+        f"{n} compiled groups in {st['parts']}: {st['done']} done, {st['saved_part_way']} "
+        f"saved part way, {st['not_started']} not started; {st['cpu_s'] / 3600:.2f} CPU-h "
+        "in them so far",
+        file=out,
+    )
+    table = [("task", "group", "candidates", "status", "progress", "CPU-h")]
+    for r in st["groups"]:
+        progress = ""
+        if r["status"] == "saved part way":
+            progress = f"{r['checkpoints_done']} of {r['checkpoints']} checkpoints"
+            if r["checkpoints_done"]:
+                progress += f" ({fmt_steps(r['env_steps'])} env steps)"
+            progress += f" + {r['iterations_past']} iterations"
+        cpu = f"{r['cpu_s'] / 3600:.2f}" if "cpu_s" in r else ""
+        table.append((r["task"], str(r["group"]), str(r["candidates"]), r["status"], progress,
+                      cpu))  # fmt: skip
+    widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
+    for row in table:
+        print("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip(), file=out)
+    if st["other_files"]:
+        print(
+            f"{st['other_files']} other outcome or state files in {st['parts']} belong to none "
+            "of these groups (another search, or the other --save-state mode)",
+            file=out,
+        )
+
+
 def ray_dispatch(group_cpus: int) -> Any:
     """A :func:`jax_learners.train_candidates` dispatch over the connected Ray cluster: each
     group is a task reserving ``group_cpus`` CPUs (capped at the largest node's); outcomes
@@ -351,6 +458,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "stop loses minutes of a group rather than all of it (float rounding differs from "
         "one-call training, so its groups' outcomes are saved apart from those)",
     )
+    p.add_argument(
+        "--status",
+        action="store_true",
+        help="print how far this search got in --parts (each compiled group done, saved part "
+        "way or not started; give the search's own flags, --save-state included) and exit, "
+        "training nothing",
+    )
     a = p.parse_args(argv)
     if a.group_cpus < 1:
         p.error(f"--group-cpus: {a.group_cpus} must be >= 1")
@@ -381,6 +495,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         for c in draw(a.algo, a.trials, a.groups, a.sampler_seed)
     ]
     parts = a.parts or a.out.with_name(a.out.name + ".parts")
+    if a.status:
+        st = search_status(a.algo, tasks, candidates, seeds, a.budget,
+                           suite.checkpoints(a.budget), parts, a.save_state)  # fmt: skip
+        print_status(st)
+        return st
     argv_s = argv if argv is not None else sys.argv[1:]
     command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
     learner = LEARNER[a.algo]

@@ -58,7 +58,7 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "task and a draw of the static knobs, 10 for this suite) is a Ray task of `--group-cpus` "
         "CPUs. It resumes from the groups it saved (`--parts`), so it can span sessions "
         "(with `--save-state`, from inside a group too: its training state is saved there "
-        "every few minutes); a "
+        "every few minutes), and the same command with `--status` prints how far it got; a "
         "parts directory under `docs/results/v2-pending` (its `study.json` is the search's "
         "manifest) is named in the headline as a set in progress until the search ends. It "
         "comes before a budget's runs: a run at a budget with no tuned entry uses "
