@@ -61,6 +61,7 @@ LAYERS = [
     # them through the learner class (learners.PLUGINS), not by import.
     "sixaxis_avoid.benchmark.jax_values",
     "sixaxis_avoid.benchmark.jax_state",
+    "sixaxis_avoid.benchmark.jax_groups",
     "sixaxis_avoid.benchmark.jax_rejax",
     "sixaxis_avoid.benchmark.jax_learners",
     "sixaxis_avoid.benchmark.jax_runs",

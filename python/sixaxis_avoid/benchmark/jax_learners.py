@@ -37,7 +37,6 @@ here.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import importlib.metadata
 import json
 import time
@@ -49,6 +48,14 @@ import numpy as np
 from sixaxis_avoid._deps import require
 from sixaxis_avoid.benchmark import jax_state
 from sixaxis_avoid.benchmark._io import atomic_write_text
+from sixaxis_avoid.benchmark.jax_groups import (  # re-exported: the groups' layout
+    GroupJob,
+    PlannedGroup,
+    candidate_groups,
+    group_part,
+    plan_groups,
+    saved_group,
+)
 from sixaxis_avoid.benchmark.jax_rejax import counting_env, rejax_classes  # re-exported
 from sixaxis_avoid.benchmark.jax_values import (  # re-exported: the learners' public names
     ACTIVATIONS,
@@ -419,15 +426,6 @@ def compiled_group(
     return _GROUPS[key]
 
 
-def candidate_groups(algo: str, candidates: list[dict[str, Any]]) -> list[list[int]]:
-    """The candidates' indices split by their :data:`STATIC` values (one compiled program
-    each), in order of first appearance."""
-    groups: dict[str, list[int]] = {}
-    for i, c in enumerate(candidates):
-        groups.setdefault(static_key(algo, check_values(algo, c)), []).append(i)
-    return list(groups.values())
-
-
 def train_group(
     algo: str,
     task: Any,
@@ -470,14 +468,6 @@ def train_group(
     }
 
 
-def saved_group(path: Path | None, ident: str | None) -> dict[str, Any] | None:
-    """The outcome saved at ``path`` if it carries ``ident`` (:func:`group_part`), else None."""
-    if path is None or not path.exists():
-        return None
-    saved = json.loads(path.read_text())
-    return saved if saved.get("ident") == ident else None
-
-
 def candidate_rows(
     checked: list[dict[str, Any]],
     idx: list[int],
@@ -503,11 +493,6 @@ def candidate_rows(
         }
         for j, i in enumerate(idx)
     }
-
-
-#: One group to train: ``(algo, task, members, seeds, budget, checkpoints[, state])``, the
-#: arguments of :func:`train_group`.
-GroupJob = tuple[Any, ...]
 
 
 def train_in_process(jobs: list[GroupJob]) -> Any:
@@ -571,78 +556,6 @@ def train_candidates(
         if log:
             log(f"{p.task.id} group {p.group}: {out['group_wall_s']:.0f} s")
     return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
-
-
-@dataclasses.dataclass(frozen=True)
-class PlannedGroup:
-    """One compiled group of a search or a run (:func:`plan_groups`): its ``task``, its index
-    ``group`` among the task's groups, the candidates' indices (``members``), the arguments
-    of :func:`train_group` (``job``), the file of its outcome (``part``) and the identity
-    that file must carry (``ident``), both None without ``parts``, and the file of its
-    training state (``state``, absolute: a Ray worker's cwd differs) when it trains in
-    pieces, else None."""
-
-    task: Any
-    group: int
-    members: list[int]
-    job: GroupJob
-    part: Path | None
-    ident: str | None
-    state: Path | None
-
-
-def plan_groups(
-    algo: str,
-    tasks: list[Any],
-    checked: list[dict[str, Any]],
-    seeds: list[int],
-    budget: int,
-    checkpoints: list[int],
-    parts: Path | None = None,
-    save_state: bool = False,
-) -> list[PlannedGroup]:
-    """The compiled groups that :func:`train_candidates` trains for these arguments
-    (``checked``: the candidates' checked values), task by task, each group in order of
-    :func:`candidate_groups`; nothing is trained or read. ``jax_tune --status`` reads a
-    search's progress from it."""
-    out = []
-    pieces = save_state and parts is not None
-    groups = candidate_groups(algo, checked)
-    for task in tasks:
-        for g, idx in enumerate(groups):
-            job = (algo, task, [checked[i] for i in idx], seeds, budget, checkpoints)
-            path, ident = (None, None) if parts is None else group_part(Path(parts), job, pieces)
-            state = None
-            if pieces and path is not None:
-                state = path.resolve().with_suffix(jax_state.STATE_SUFFIX)
-            out.append(PlannedGroup(task, g, idx, job, path, ident, state))
-    return out
-
-
-def group_part(parts: Path, job: GroupJob, pieces: bool = False) -> tuple[Path, str]:
-    """Where :func:`train_candidates` saves one group's outcome (``job``: the arguments of
-    :func:`train_group`), and the identity (a sha256) a saved outcome must carry to be read
-    back: the algorithm, the task (id, kind, spec), the group's checked values, the seeds,
-    the budget (env steps), the checkpoints, the versions of jax and rejax, and with
-    ``pieces`` the pieces' size (a group trained in pieces with a saved state)."""
-    import hashlib
-
-    algo, task, members, seeds, budget, checkpoints = job[:6]
-    versions = {}
-    for pkg in ("jax", "rejax"):
-        try:
-            versions[pkg] = importlib.metadata.version(pkg)
-        except importlib.metadata.PackageNotFoundError:
-            versions[pkg] = None
-    blob = json.dumps(
-        [algo, task.id, task.kind, task.spec, members, list(seeds), int(budget),
-         [int(c) for c in checkpoints], versions]
-        + ([{"pieces": jax_state.STATE_PIECES}] if pieces else []),
-        sort_keys=True,
-        default=str,
-    )  # fmt: skip
-    ident = hashlib.sha256(blob.encode()).hexdigest()
-    return parts / f"{task.id}--{ident[:16]}.json", ident
 
 
 # ------------------------------------------------------------------------------------------

@@ -264,7 +264,7 @@ def search_status(
 ) -> dict[str, Any]:
     """How far the search of these arguments got in ``parts``, read from its files; nothing
     is trained or written. ``groups``: one entry per compiled group, task by task
-    (:func:`jax_learners.plan_groups`), with ``task``, ``group``, ``candidates`` and
+    (:func:`jax_groups.plan_groups`), with ``task``, ``group``, ``candidates`` and
     ``status``:
 
     - ``"done"``: its outcome is saved; ``cpu_s`` and ``wall_s`` are its own (seconds).

@@ -31,7 +31,7 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
         man = json.loads(manifest.read_text())
         runs = load_runs(manifest.parent) if (manifest.parent / "runs").is_dir() else []
         # "jax_tune": a JAX search's parts directory; its units are compiled groups, each
-        # saved as TASK--IDENT.json (jax_learners.group_part), not run files.
+        # saved as TASK--IDENT.json (jax_groups.group_part), not run files.
         groups = (
             len(list(manifest.parent.glob("*--*.json"))) if man.get("kind") == "jax_tune" else None
         )
