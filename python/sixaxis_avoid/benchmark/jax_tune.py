@@ -304,21 +304,16 @@ def search_status(
         else:
             row["status"] = "not started"
         rows.append(row)
-    mine = {f for p in planned for f in (p.part, p.state) if f is not None}
-    mine = {f.resolve() for f in mine}
-    other = [
-        f
-        for f in (
-            sorted(parts.glob("*--*.json")) + sorted(parts.glob("*" + jax_state.STATE_SUFFIX))
-        )
-        if f.resolve() not in mine
-    ]
-    count = {s: sum(r["status"] == s for r in rows) for s in ("done", "saved part way",
-                                                              "not started")}  # fmt: skip
+    mine = {f.resolve() for p in planned for f in (p.part, p.state) if f is not None}
+    files = [*parts.glob("*--*.json"), *parts.glob("*" + jax_state.STATE_SUFFIX)]
+    other = [f for f in files if f.resolve() not in mine]
+    status = [r["status"] for r in rows]
     return {
         "parts": str(parts),
         "groups": rows,
-        **{k.replace(" ", "_"): v for k, v in count.items()},
+        "done": status.count("done"),
+        "saved_part_way": status.count("saved part way"),
+        "not_started": status.count("not started"),
         "cpu_s": sum(r.get("cpu_s", 0.0) for r in rows),
         "other_files": len(other),
     }
