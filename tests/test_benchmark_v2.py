@@ -21,7 +21,7 @@ def v2():
 
 def test_v2_has_the_design_tasks_and_budget_axis(v2):
     assert v2.major_version == 2
-    assert v2.budgets["axis"] == [30000, 100000, 300000, 1000000, 3000000]
+    assert v2.budgets["axis"] == [30000, 100000, 300000, 1000000, 3000000, 10000000]
     assert len(v2.seeds) == 10
     ids = [t.id for t in v2.tasks]
     assert "paper_simple" in ids and "paper_complex" not in ids and "replan_clutter" in ids
@@ -106,11 +106,11 @@ def test_plan_runs_one_run_per_budget_with_the_budget_in_the_file_name(v2, tmp_p
     specs = plan_runs(
         v2, ["dqn", "bfs"], seeds=[0, 1], tasks=tasks, hyperparams=tmp_path / "none.json"
     )
-    # By default every budget of the axis but its best_only tail (3M: named when wanted).
-    assert len(specs) == 2 * 2 * 2 * 4
+    # By default every budget of the axis but its best_only tail (10M: named when wanted).
+    assert len(specs) == 2 * 2 * 2 * 5
     dqn = [s for s in specs if s["learner"] == "dqn"]
     assert sorted({s["budget"] for s in dqn}) == v2.budgets["axis"][:-1]
-    assert v2.budgets["best_only"] == [3000000]
+    assert v2.budgets["best_only"] == [10000000]
     for s in dqn:  # the goal task gets the same total budget
         assert s["budget"] == s["budget_axis"] and s["checkpoints"][-1] == s["budget"]
         assert s["hyperparams_status"] == "untuned"  # no by_budget entry at all
@@ -121,9 +121,9 @@ def test_plan_runs_one_run_per_budget_with_the_budget_in_the_file_name(v2, tmp_p
     sub = plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[100000],
                     hyperparams=tmp_path / "none.json")  # fmt: skip
     assert [s["budget"] for s in sub] == [100000]
-    top = plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[3000000],
+    top = plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[10000000],
                     hyperparams=tmp_path / "none.json")  # fmt: skip
-    assert [s["budget"] for s in top] == [3000000]
+    assert [s["budget"] for s in top] == [10000000]
     with pytest.raises(ValueError, match="12345 is not on"):
         plan_runs(v2, ["dqn"], seeds=[0], tasks=tasks[:1], budgets=[12345])
     # v1 specs are unchanged: no axis, no budget in the file name.

@@ -9,7 +9,7 @@ A suite is a JSON file (``suites/<name>.json`` in this package, or any path) wit
   evaluations on a geometric grid of env steps up to the budget. A suite with a budget axis
   (v2) gives ``axis``, rising env-step budgets that every learner runs, and may mark its tail
   ``best_only``: budgets that only the best learners at the last budget before them run, to
-  show their plateau (v2: 3M env steps after 1M).
+  show their plateau (v2: 10M env steps after 3M).
 - ``algorithm2``: the re-plan caps of Algorithm 2 per learner family.
 - ``tasks``: the reported tasks; ``tuning``: tasks and seeds for ``benchmark tune``, which
   must be disjoint from the reported ones (checked).
