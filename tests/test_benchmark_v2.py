@@ -392,6 +392,10 @@ def test_v2_best_only_budget_is_run_by_the_best_learners_alone(tmp_path):
     assert "Not run yet" not in text and "Not every learner ran at every budget" not in text
     assert "| alpha | 100k |" in text and "| beta | 100k |" not in text
     assert "`budgets.best_only`" in text  # Statistics says what the budget is for
+    # Nothing lacking: the cluster example runs the best learners at the axis's end, on the
+    # seeds the ranking compares (10 here).
+    assert "--learners alpha --seeds 10 --budgets 100000 " in text
+    assert "the best learners' (alpha) runs at 100k env steps, 10 seeds" in text
     assert "Budget axis (env steps): 1000, 10k, 100k (100k for the best learners only" in text
     # alpha falls on paper_simple at 100k: not plateaued at 10k, and the page says where.
     for f in (out / "runs").glob("paper_simple__alpha__*__b100000.json"):
@@ -413,6 +417,9 @@ def test_v2_best_only_budget_is_run_by_the_best_learners_alone(tmp_path):
     assert a["headline"]["budget"] == 10000 and not a["headline"]["plateaued"]
     text = md.read_text()
     assert "Not run yet: alpha at 100k." in text
+    # The cluster example is what the study lacks first.
+    assert "--learners alpha --seeds 10 --budgets 100000 " in text
+    assert "what the study lacks first: alpha at 100k env steps (10 seeds" in text
     assert "the headline sits at the largest budget at which every ranked learner ran, 10k" in text
     assert "At 10k:" not in text  # no best learner ran past it: nothing to say where
 

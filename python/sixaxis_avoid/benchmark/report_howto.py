@@ -1,14 +1,18 @@
 """The v2 page's *How to run* section: the commands that produced the study, the report
-command, and how to run a larger study on a Ray cluster (docs/BENCHMARKS.md, *How to run*).
+command, and how to run a larger study on a Ray cluster (docs/BENCHMARKS.md, *How to run*),
+its example being the runs the study lacks first.
 
 Entry points: :func:`how_to_run` (the section's lines, from :func:`report_v2.analyse_v2`'s
-analysis) and :func:`report_command_v2` (the command that writes the page).
+analysis), :func:`report_command_v2` (the command that writes the page) and
+:func:`cluster_runs` (the budget, learners and seeds of the cluster example).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
+
+from sixaxis_avoid.benchmark.stats import fmt_steps
 
 
 def report_command_v2(a: dict[str, Any], out: Path) -> str:
@@ -19,6 +23,34 @@ def report_command_v2(a: dict[str, Any], out: Path) -> str:
     )
 
 
+def cluster_runs(a: dict[str, Any]) -> tuple[int, list[str], int]:
+    """The cluster example's budget, learners and seeds: the first budget of the axis that
+    some ranked learner still lacks (``missing_budgets``), the learners that lack it and
+    the seeds the ranking compares at the last budget every ranked learner ran; with none
+    lacking, the best learners at the axis's last budget."""
+    missing = a.get("missing_budgets") or {}
+    common = a.get("common_budgets") or []
+    seeds = len(a["per_budget"][common[-1]]["seeds"]) if common else len(a["suite"].seeds)
+    if not missing:
+        return a["axis"][-1], list(a.get("best") or a.get("ranked") or []), seeds
+    budget = min(min(bs) for bs in missing.values())
+    return budget, [lr for lr in a["ranked"] if budget in missing.get(lr, [])], seeds
+
+
+def cluster_what(a: dict[str, Any]) -> str:
+    """What the cluster example's run command runs, in words."""
+    budget, learners, seeds = cluster_runs(a)
+    who = ", ".join(learners)
+    if not a.get("missing_budgets"):
+        return f"the best learners' ({who}) runs at {fmt_steps(budget)} env steps, {seeds} seeds"
+    return (
+        f"what the study lacks first: {who} at {fmt_steps(budget)} env steps ({seeds} seeds, "
+        "as the ranking compares at the last budget every ranked learner ran), each once its "
+        "search has put the values tuned there in the hyperparameter file (or its twin's "
+        "values are borrowed)"
+    )
+
+
 def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
     """The section: setup, every command the study's manifest recorded (or the default run
     command), the report command, then the Ray cluster paragraph."""
@@ -26,6 +58,7 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
     commands = (a["manifest"] or {}).get("commands", []) or [
         f"python -m sixaxis_avoid.benchmark run --suite {suite} --out-dir {a['results_dir']}"
     ]
+    budget, learners, seeds = cluster_runs(a)
     return [
         "## How to run",
         "",
@@ -36,15 +69,16 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "```",
         "",
         "**On a Ray cluster**, for the budgets this machine cannot finish in a session "
-        "(tested on two nodes started on loopback: tests/test_remote_ray.py):",
+        "(tested on two nodes started on loopback: tests/test_remote_ray.py); the run "
+        f"command below is {cluster_what(a)}:",
         "",
         "```bash",
         "ray start --head --port=6379                 # on the head node",
         "ray start --address=HEAD:6379                # on every other node (same checkout and "
         "environment)",
-        f"python -m sixaxis_avoid.benchmark run --suite {suite} --learners jax_ppo,ppo "
-        "--seeds 5 --budgets 1000000 --hyperparams python/sixaxis_avoid/benchmark/hyperparams/"
-        f"v2.json --address HEAD:6379 --no-progress --out-dir {a['results_dir']}",
+        f"python -m sixaxis_avoid.benchmark run --suite {suite} --learners {','.join(learners)} "
+        f"--seeds {seeds} --budgets {budget} --hyperparams python/sixaxis_avoid/benchmark/"
+        f"hyperparams/v2.json --address HEAD:6379 --no-progress --out-dir {a['results_dir']}",
         "```",
         "",
         "Each SB3 or tabular run is a Ray task of one CPU; a JAX learner's seeds of one task and "
