@@ -422,6 +422,17 @@ def test_v2_best_only_budget_is_run_by_the_best_learners_alone(tmp_path):
     assert "what the study lacks first: alpha at 100k env steps (10 seeds" in text
     assert "the headline sits at the largest budget at which every ranked learner ran, 10k" in text
     assert "At 10k:" not in text  # no best learner ran past it: nothing to say where
+    # While the budget before it is not one every ranked learner ran, the best learners there
+    # are not known, so nobody lacks the best_only budget yet (alpha has not run it either).
+    for f in (out / "runs").glob("*__beta__*__b10000.json"):
+        f.unlink()
+    a = write_report_v2(out, md, reps=100, suite=str(suite_path))
+    assert a["common_budgets"] == [1000]
+    assert a["missing_budgets"] == {"beta": [10000]}
+    text = md.read_text()
+    assert "Not run yet: beta at 10k." in text
+    assert "| alpha | 100k |" not in text  # nor is its tuning row listed
+    assert "--learners beta --seeds 10 --budgets 10000 " in text
 
 
 def test_v2_best_only_must_be_the_axis_tail(tmp_path):

@@ -195,13 +195,14 @@ def tuning_rows(a: dict[str, Any]) -> list[str]:
         "|---|---|---|---|---|---|---|",
     ]
     best_only = a["suite"].best_only
+    missing = a.get("missing_budgets", {})
     for lr in learners:
         by = data.get("learners", {}).get(lr, {}).get("by_budget", {})
         for b in a["axis"]:
             e = by.get(str(b))
             statuses = recorded.get((lr, b), set())
-            if e is None and not statuses and b in best_only and lr not in a.get("best", []):
-                continue  # a budget for the best learners only (*Statistics*)
+            if e is None and not statuses and b in best_only and b not in missing.get(lr, []):
+                continue  # a budget for the best learners only, not due (*Statistics*)
             runs = ", ".join(sorted(statuses)) or "no runs"
             if e is None:
                 # A learner without hyperparameters to tune (BFS) is "n/a", not "untuned".

@@ -187,15 +187,17 @@ def analyse_v2(
     scope = common or budgets
     last = scope[-1]
     best = stats.best_learners({lr: v for lr, v in means[last].items() if lr in ranked})
-    # The suite's best_only budgets (the axis's tail) are for the best learners alone: the
-    # others are not missing there.
+    # The suite's best_only budgets (the axis's tail) are for the best learners at the budget
+    # before them alone: the others are not missing there, and nobody is while that budget
+    # is not one every ranked learner ran (its best learners are not known yet).
     best_only = suite.best_only
+    axis = a["axis"]
     missing = {
         lr: [
             b
-            for b in a["axis"]
+            for b in axis
             if (b not in per_budget or lr not in per_budget[b]["complete"])
-            and (b not in best_only or lr in best)
+            and (b not in best_only or (lr in best and axis[axis.index(b) - 1] == last))
         ]
         for lr in ranked
     }
