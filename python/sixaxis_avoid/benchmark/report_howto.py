@@ -37,9 +37,8 @@ def cluster_runs(a: dict[str, Any]) -> tuple[int, list[str], int]:
     return budget, [lr for lr in a["ranked"] if budget in missing.get(lr, [])], seeds
 
 
-def cluster_what(a: dict[str, Any]) -> str:
-    """What the cluster example's run command runs, in words."""
-    budget, learners, seeds = cluster_runs(a)
+def cluster_what(a: dict[str, Any], budget: int, learners: list[str], seeds: int) -> str:
+    """What the cluster example's run command (:func:`cluster_runs`) runs, in words."""
     who = ", ".join(learners)
     if not a.get("missing_budgets"):
         return f"the best learners' ({who}) runs at {fmt_steps(budget)} env steps, {seeds} seeds"
@@ -70,7 +69,7 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "",
         "**On a Ray cluster**, for the budgets this machine cannot finish in a session "
         "(tested on two nodes started on loopback: tests/test_remote_ray.py); the run "
-        f"command below is {cluster_what(a)}:",
+        f"command below is {cluster_what(a, budget, learners, seeds)}:",
         "",
         "```bash",
         "ray start --head --port=6379                 # on the head node",
