@@ -516,3 +516,90 @@ def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, mon
     assert again["per_task_timing"][0]["state_resumes"] == 1
     assert_same_trials(whole, again)
     assert not pdir.exists()  # the state goes with its group, the parts with the search
+
+
+def test_a_search_split_by_seed_reads_whole_groups_back_and_saves_each_seed(tmp_path, monkeypatch):
+    # Two static groups on two tasks, as above; the first task's groups are saved whole by
+    # a search stopped in the second task, then the same search goes on split by seed.
+    monkeypatch.setattr(
+        jax_tune,
+        "space",
+        lambda algo, rng: (
+            {**TINY_PPO, "net_arch": [[8], [16]][int(rng.integers(2))]},
+            {"learning_rate": float(rng.uniform(1e-4, 3e-3))},
+        ),
+    )
+    pdir = tmp_path / "study-pending" / "jax_tune-ppo-512"
+    argv = [
+        "--algo", "ppo", "--suite", "v1", "--tasks", "tune-gen-easy-1000,tune-gen-medium-1001",
+        "--budget", "512", "--trials", "4", "--seeds", "2", "--groups", "2",
+        "--sampler-seed", "3", "--parts", str(pdir), "--out", str(tmp_path / "t.json"),
+        "--hyperparams", str(tmp_path / "hp.json"),
+    ]  # fmt: skip
+    run, calls = jax_learners.Compiled.run, []
+
+    def stopping_at(n):
+        def call(self, candidates, seeds):
+            calls.append((self.task.id, list(seeds)))
+            if len(calls) == n:
+                raise KeyboardInterrupt
+            return run(self, candidates, seeds)
+
+        return call
+
+    monkeypatch.setattr(jax_learners.Compiled, "run", stopping_at(3))
+    with pytest.raises(KeyboardInterrupt):
+        jax_tune.main(argv)
+    assert calls[-1] == ("tune-gen-medium-1001", [100, 101])  # the first two were saved whole
+
+    split = [*argv, "--split-seeds"]
+    st = jax_tune.main([*split, "--status"])
+    assert [(r["task"], r["group"], r["seed"], r["status"]) for r in st["groups"]] == [
+        ("tune-gen-easy-1000", 0, None, "done"),
+        ("tune-gen-easy-1000", 1, None, "done"),
+        ("tune-gen-medium-1001", 0, 100, "not started"),
+        ("tune-gen-medium-1001", 0, 101, "not started"),
+        ("tune-gen-medium-1001", 1, 100, "not started"),
+        ("tune-gen-medium-1001", 1, 101, "not started"),
+    ]
+    assert (st["groups_done"], st["groups_total"]) == (2, 4)
+
+    # Stopped after one seed of the first group left: that seed is saved with its group's
+    # identity, and the page counts its group only once every seed is in.
+    calls.clear()
+    monkeypatch.setattr(jax_learners.Compiled, "run", stopping_at(2))
+    with pytest.raises(KeyboardInterrupt):
+        jax_tune.main(split)
+    assert calls == [("tune-gen-medium-1001", [100]), ("tune-gen-medium-1001", [101])]
+    st = jax_tune.main([*split, "--status"])
+    assert [r["status"] for r in st["groups"]][2:] == ["done"] + ["not started"] * 3
+    assert (st["done"], st["groups_done"]) == (3, 2)
+    seed_part = json.loads(sorted(pdir.glob("tune-gen-medium-1001--*.json"))[0].read_text())
+    assert seed_part["seed"] == 100 and len(seed_part["spl"][0]) == 1
+    assert seed_part["group_ident"] != seed_part["ident"]
+    (p,) = report_pending.sets_in_progress(tmp_path / "study")
+    assert (p["made"], p["of"]) == (2, 4)
+    buf = io.StringIO()
+    jax_tune.print_status(st, buf)
+    assert "(4 of them one seed of a group split by seed)" in buf.getvalue()
+    assert "2 of 4 groups done" in buf.getvalue()
+
+    # The same command trains the three seeds left, one compiled group each.
+    calls.clear()
+    monkeypatch.setattr(jax_learners.Compiled, "run", stopping_at(0))
+    done = jax_tune.main(split)
+    assert calls == [("tune-gen-medium-1001", [101]), ("tune-gen-medium-1001", [100]),
+                     ("tune-gen-medium-1001", [101])]  # fmt: skip
+    assert done["resumed_groups"] == 2 and not pdir.exists()
+    assert done["wall_time_s"] >= seed_part["group_wall_s"]
+    for tr in done["trials"]:
+        assert all(len(v) == 2 for v in tr["final_score"].values())
+        assert all(len(c["score"]) == 2 for c in tr["curves"].values())
+    # Each seed of a split group is what that seed alone trains, seed by seed.
+    medium = load_suite("v1").tuning_tasks[1]
+    members = [done["trials"][i]["values"] for i in (0, 2)]  # group 0: trials 0 and 2
+    for k, seed in enumerate([100, 101]):
+        alone = jax_learners.train_group("ppo", medium, members, [seed], 512,
+                                         load_suite("v1").checkpoints(512))  # fmt: skip
+        for j, i in enumerate((0, 2)):
+            assert done["trials"][i]["curves"][medium.id]["score"][k] == alone["spl"][j][0]

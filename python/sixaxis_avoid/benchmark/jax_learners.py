@@ -53,6 +53,7 @@ from sixaxis_avoid.benchmark.jax_groups import (  # re-exported: the groups' lay
     PlannedGroup,
     candidate_groups,
     group_part,
+    merge_seed_outcomes,
     plan_groups,
     saved_group,
 )
@@ -81,9 +82,10 @@ __all__ = [
     "ACTIVATIONS", "ALGOS", "DEFAULTS", "DQN_DEFAULTS", "ENV_DEFAULTS", "LR_SCHEDULES",
     "PPO_DEFAULTS", "STATIC", "TRACED", "Compiled", "GroupJob", "JaxLearnerError",
     "candidate_groups", "candidate_rows", "check_values", "compiled_group", "counting_env",
-    "group_part", "iteration_steps", "main", "parse_args", "parse_sets", "rejax_classes",
-    "rejax_config", "run", "saved_group", "sb3_speed", "static_key", "traced_fields",
-    "train_candidates", "train_group", "train_in_process", "updates_per_env_step",
+    "group_part", "iteration_steps", "main", "merge_seed_outcomes", "parse_args",
+    "parse_sets", "rejax_classes", "rejax_config", "run", "saved_group", "sb3_speed",
+    "static_key", "traced_fields", "train_candidates", "train_group", "train_in_process",
+    "updates_per_env_step",
 ]  # fmt: skip
 
 
@@ -474,10 +476,13 @@ def candidate_rows(
     g: int,
     outcome: dict[str, Any],
     resumed: bool,
-    path: Path | None,
+    paths: list[Path | None],
 ) -> dict[int, dict[str, Any]]:
-    """One :func:`train_candidates` entry per candidate of group ``g`` (indices ``idx``)."""
+    """One :func:`train_candidates` entry per candidate of group ``g`` (indices ``idx``):
+    ``resumed`` if its whole outcome was read back, ``resumed_wall_s`` the wall time of what
+    was read back (a group split by seed may be read back in part), ``parts`` its files."""
     keys = ("compile_s", "train_wall_s", "train_cpu_s", "group_wall_s", "group_cpu_s")
+    back = outcome.get("resumed_wall_s", outcome["group_wall_s"] if resumed else 0.0)
     return {
         i: {
             "values": checked[i],
@@ -487,8 +492,9 @@ def candidate_rows(
             "success": outcome["success"][j],
             "spl": outcome["spl"][j],
             "resumed": resumed,
+            "resumed_wall_s": float(back),
             "state_resumes": int(outcome.get("resumes", 0)),
-            "part": None if path is None else str(path),
+            "parts": [str(f) for f in paths if f is not None],
             **{k: outcome[k] for k in keys},
         }
         for j, i in enumerate(idx)
@@ -512,6 +518,7 @@ def train_candidates(
     dispatch: Any = None,
     log: Any = None,
     save_state: bool = False,
+    split_seeds: bool = False,
 ) -> dict[str, list[dict[str, Any]]]:
     """Train every candidate (a values dict) x every seed on each of ``tasks`` for
     ``budget`` env steps: one compiled, vmapped call per task and group of equal
@@ -532,17 +539,42 @@ def train_candidates(
     :meth:`Compiled.run`), so a stop loses minutes of it, not the whole group, on a machine
     (or shared file system) that keeps the file. Pieces give the same numbers whatever the
     stops, but not bit for bit those of one call (float rounding differs across the
-    compiled pieces), so the mode is part of a group's identity (:func:`group_part`)."""
+    compiled pieces), so the mode is part of a group's identity (:func:`group_part`).
+
+    With ``split_seeds`` (and ``parts``), a group not saved whole trains as one group per
+    seed (:func:`plan_groups`), each saved as it finishes (with its group's identity,
+    ``group_ident``, and its ``seed``); the entries are the same once every seed is in
+    (:func:`merge_seed_outcomes`)."""
     checked = [check_values(algo, c) for c in candidates]
     checkpoints = checkpoints or [budget]
     rows: dict[str, dict[int, dict[str, Any]]] = {t.id: {} for t in tasks}
     jobs: list[GroupJob] = []
     where: list[PlannedGroup] = []
-    for p in plan_groups(algo, tasks, checked, seeds, budget, checkpoints, parts, save_state):
+    # A split group's seeds so far: (task, group) -> seed index -> (outcome, read back, file)
+    split: dict[tuple[str, int], dict[int, tuple[dict[str, Any], bool, Path | None]]] = {}
+
+    def settle(p: PlannedGroup, out: dict[str, Any], resumed: bool) -> None:
+        if p.split is None:
+            rows[p.task.id].update(candidate_rows(checked, p.members, p.group, out, resumed,
+                                                  [p.part]))  # fmt: skip
+            return
+        got = split.setdefault((p.task.id, p.group), {})
+        got[p.split] = (out, resumed, p.part)
+        if len(got) < len(seeds):
+            return
+        each = [got[k] for k in range(len(seeds))]
+        merged = merge_seed_outcomes([o for o, _, _ in each])
+        merged["resumed_wall_s"] = sum(o["group_wall_s"] for o, back, _ in each if back)
+        rows[p.task.id].update(candidate_rows(checked, p.members, p.group, merged,
+                                              all(b for _, b, _ in each),
+                                              [f for _, _, f in each]))  # fmt: skip
+
+    plan = plan_groups(algo, tasks, checked, seeds, budget, checkpoints, parts, save_state,
+                       split_seeds)  # fmt: skip
+    for p in plan:
         saved = saved_group(p.part, p.ident)
         if saved is not None:
-            rows[p.task.id].update(candidate_rows(checked, p.members, p.group, saved, True,
-                                                  p.part))  # fmt: skip
+            settle(p, saved, True)
         else:
             job = p.job if p.state is None else (*p.job, (str(p.state), p.ident))
             jobs.append(job)
@@ -550,11 +582,14 @@ def train_candidates(
     for k, outcome in (dispatch or train_in_process)(jobs):
         p = where[k]
         out = {"ident": p.ident, **outcome}
+        if p.split is not None:
+            out.update(group_ident=p.group_ident, seed=int(seeds[p.split]))
         if p.part is not None:
             atomic_write_text(p.part, json.dumps(out) + "\n")
-        rows[p.task.id].update(candidate_rows(checked, p.members, p.group, out, False, p.part))
+        settle(p, out, False)
         if log:
-            log(f"{p.task.id} group {p.group}: {out['group_wall_s']:.0f} s")
+            which = "" if p.split is None else f" seed {seeds[p.split]}"
+            log(f"{p.task.id} group {p.group}{which}: {out['group_wall_s']:.0f} s")
     return {t: [r[i] for i in range(len(checked))] for t, r in rows.items()}
 
 

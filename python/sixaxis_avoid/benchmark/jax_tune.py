@@ -29,7 +29,10 @@ trained at once, vmapped, on the suite's tuning tasks::
   in progress. With ``--save-state``, a group also saves its training state there
   (``*.state.npz``, not committed) at least every few minutes and goes on from it when
   run again, so a long group (hours at 3M env steps) stopped midway is not lost; see
-  :meth:`jax_learners.Compiled.run`. ``--status`` with the search's own flags prints how
+  :meth:`jax_learners.Compiled.run`. That holds on a machine that keeps the file; on one
+  that keeps nothing between sittings, ``--split-seeds`` trains each group not yet saved
+  as one group per seed (about a third of the time each at 3 seeds), each saved as it
+  finishes (:func:`jax_groups.plan_groups`). ``--status`` with the search's own flags prints how
   far it got (each group done, saved part way or not started) and trains nothing.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
@@ -134,6 +137,7 @@ def tune(
     parts: Path | None = None,
     dispatch: Any = None,
     save_state: bool = False,
+    split_seeds: bool = False,
 ) -> dict[str, Any]:
     """Train every candidate on every tuning task and seed; score and rank them.
 
@@ -144,14 +148,17 @@ def tune(
     cluster). Times (seconds): ``wall_time_s`` is this call's plus the resumed groups' own;
     ``cpu_time_s`` and each task's ``wall_s`` add up the groups' own (compiling and
     training), wherever they ran. ``part_files`` lists the saved outcomes (not part of the
-    trials file: :func:`main` removes them once that file is written)."""
+    trials file: :func:`main` removes them once that file is written). ``split_seeds``:
+    groups not saved whole train one seed at a time (:func:`jax_learners.train_candidates`);
+    ``resumed_groups`` counts the groups read back whole, and the wall time adds the seeds
+    read back."""
     tasks = suite.tuning_tasks if tasks is None else tasks
     if not tasks:
         raise jl.JaxLearnerError(f"suite {suite.name!r}: tuning.tasks is empty")
     t0 = time.perf_counter()
     per_task = jl.train_candidates(
         algo, tasks, candidates, seeds, budget, suite.checkpoints(budget),
-        parts=parts, dispatch=dispatch, log=log, save_state=save_state,
+        parts=parts, dispatch=dispatch, log=log, save_state=save_state, split_seeds=split_seeds,
     )  # fmt: skip
     timing: list[dict[str, Any]] = []
     groups_all: list[dict[str, Any]] = []
@@ -169,6 +176,7 @@ def tune(
             }
         )
     resumed = [r for r in groups_all if r["resumed"]]
+    resumed_wall = sum(r["resumed_wall_s"] for r in groups_all)
     trials = []
     for i, values in enumerate(candidates):
         scores = {t: [row[-1] for row in per_task[t][i]["spl"]] for t in per_task}
@@ -197,11 +205,11 @@ def tune(
         "trials": trials,
         "best_trial": best["number"],
         "best_value": best["objective"],
-        "wall_time_s": time.perf_counter() - t0 + sum(r["group_wall_s"] for r in resumed),
+        "wall_time_s": time.perf_counter() - t0 + resumed_wall,
         "cpu_time_s": sum(r["group_cpu_s"] for r in groups_all),
         "resumed_groups": len(resumed),
         "per_task_timing": timing,
-        "part_files": sorted({r["part"] for rows in per_task.values() for r in rows if r["part"]}),
+        "part_files": sorted({f for rows in per_task.values() for r in rows for f in r["parts"]}),
     }
 
 
@@ -261,11 +269,13 @@ def search_status(
     checkpoints: list[int],
     parts: Path,
     save_state: bool = False,
+    split_seeds: bool = False,
 ) -> dict[str, Any]:
     """How far the search of these arguments got in ``parts``, read from its files; nothing
     is trained or written. ``groups``: one entry per compiled group, task by task
-    (:func:`jax_groups.plan_groups`), with ``task``, ``group``, ``candidates`` and
-    ``status``:
+    (:func:`jax_groups.plan_groups`; with ``split_seeds`` a group not saved whole has one
+    entry per seed), with ``task``, ``group``, ``seed`` (None: the whole group),
+    ``candidates`` and ``status``:
 
     - ``"done"``: its outcome is saved; ``cpu_s`` and ``wall_s`` are its own (seconds).
     - ``"saved part way"`` (a ``save_state`` search): its training state is saved, with
@@ -275,15 +285,17 @@ def search_status(
     - ``"not started"``: neither.
 
     ``other_files`` counts the outcome and state files in ``parts`` that belong to none of
-    these groups (another search, or the other mode of ``save_state``)."""
+    these groups (another search, or the other mode of ``save_state``); ``groups_done`` the
+    groups done whole or in every seed."""
     from sixaxis_avoid.benchmark import jax_state
 
     checked = [jl.check_values(algo, c) for c in candidates]
     planned = jl.plan_groups(algo, tasks, checked, seeds, budget, checkpoints, parts,
-                             save_state)  # fmt: skip
+                             save_state, split_seeds)  # fmt: skip
     rows = []
     for p in planned:
         row: dict[str, Any] = {"task": p.task.id, "group": p.group,
+                               "seed": None if p.split is None else int(seeds[p.split]),
                                "candidates": len(p.members)}  # fmt: skip
         saved = jl.saved_group(p.part, p.ident)
         meta = None if saved or p.state is None else jax_state.state_meta(p.state)
@@ -308,9 +320,14 @@ def search_status(
     files = [*parts.glob("*--*.json"), *parts.glob("*" + jax_state.STATE_SUFFIX)]
     other = [f for f in files if f.resolve() not in mine]
     status = [r["status"] for r in rows]
+    units: dict[tuple[str, int], list[str]] = {}
+    for r in rows:
+        units.setdefault((r["task"], r["group"]), []).append(r["status"])
     return {
         "parts": str(parts),
         "groups": rows,
+        "groups_done": sum(all(x == "done" for x in u) for u in units.values()),
+        "groups_total": len(units),
         "done": status.count("done"),
         "saved_part_way": status.count("saved part way"),
         "not_started": status.count("not started"),
@@ -325,13 +342,16 @@ def print_status(st: dict[str, Any], file: Any = None) -> None:
 
     out = file or sys.stdout
     n = len(st["groups"])
+    split = sum(r["seed"] is not None for r in st["groups"])
     print(
-        f"{n} compiled groups in {st['parts']}: {st['done']} done, {st['saved_part_way']} "
-        f"saved part way, {st['not_started']} not started; {st['cpu_s'] / 3600:.2f} CPU-h "
-        "in them so far",
+        f"{n} compiled groups in {st['parts']}"
+        + (f" ({split} of them one seed of a group split by seed)" if split else "")
+        + f": {st['done']} done, {st['saved_part_way']} saved part way, {st['not_started']} "
+        f"not started; {st['cpu_s'] / 3600:.2f} CPU-h in them so far; "
+        f"{st['groups_done']} of {st['groups_total']} groups done",
         file=out,
     )
-    table = [("task", "group", "candidates", "status", "progress", "CPU-h")]
+    table = [("task", "group", "seed", "candidates", "status", "progress", "CPU-h")]
     for r in st["groups"]:
         progress = ""
         if r["status"] == "saved part way":
@@ -340,8 +360,9 @@ def print_status(st: dict[str, Any], file: Any = None) -> None:
                 progress += f" ({fmt_steps(r['env_steps'])} env steps)"
             progress += f" + {r['iterations_past']} iterations"
         cpu = f"{r['cpu_s'] / 3600:.2f}" if "cpu_s" in r else ""
-        table.append((r["task"], str(r["group"]), str(r["candidates"]), r["status"], progress,
-                      cpu))  # fmt: skip
+        seed = "all" if r["seed"] is None else str(r["seed"])
+        table.append((r["task"], str(r["group"]), seed, str(r["candidates"]), r["status"],
+                      progress, cpu))  # fmt: skip
     widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
     for row in table:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip(), file=out)
@@ -454,6 +475,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "one-call training, so its groups' outcomes are saved apart from those)",
     )
     p.add_argument(
+        "--split-seeds",
+        action="store_true",
+        help="train each group not yet saved whole as one group per seed, each saved as it "
+        "finishes (a third of a group's time at 3 seeds: for sittings on machines that keep "
+        "no state between them); the groups saved whole are read back as they are",
+    )
+    p.add_argument(
         "--status",
         action="store_true",
         help="print how far this search got in --parts (each compiled group done, saved part "
@@ -492,7 +520,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parts = a.parts or a.out.with_name(a.out.name + ".parts")
     if a.status:
         st = search_status(a.algo, tasks, candidates, seeds, a.budget,
-                           suite.checkpoints(a.budget), parts, a.save_state)  # fmt: skip
+                           suite.checkpoints(a.budget), parts, a.save_state,
+                           a.split_seeds)  # fmt: skip
         print_status(st)
         return st
     argv_s = argv if argv is not None else sys.argv[1:]
@@ -511,7 +540,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             a.algo, suite, a.budget, candidates, seeds, tasks,
             log=lambda m: (print(m, file=sys.stderr), progress()), parts=parts,
             dispatch=ray_dispatch(a.group_cpus) if a.address else None,
-            save_state=a.save_state,
+            save_state=a.save_state, split_seeds=a.split_seeds,
         )  # fmt: skip
     finally:
         if started:

@@ -15,6 +15,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from sixaxis_avoid.benchmark.jax_groups import saved_groups_count
 from sixaxis_avoid.benchmark.runner import load_runs, run_key
 from sixaxis_avoid.benchmark.stats import fmt_steps
 
@@ -31,9 +32,12 @@ def sets_in_progress(results: Path) -> list[dict[str, Any]]:
         man = json.loads(manifest.read_text())
         runs = load_runs(manifest.parent) if (manifest.parent / "runs").is_dir() else []
         # "jax_tune": a JAX search's parts directory; its units are compiled groups, each
-        # saved as TASK--IDENT.json (jax_groups.group_part), not run files.
+        # saved as TASK--IDENT.json (jax_groups.group_part), or one such file per seed for
+        # a group split by seed, not run files.
         groups = (
-            len(list(manifest.parent.glob("*--*.json"))) if man.get("kind") == "jax_tune" else None
+            saved_groups_count(manifest.parent, len(man.get("seeds", [])))
+            if man.get("kind") == "jax_tune"
+            else None
         )
         out.append(
             {
