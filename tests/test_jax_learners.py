@@ -603,3 +603,25 @@ def test_a_search_split_by_seed_reads_whole_groups_back_and_saves_each_seed(tmp_
                                          load_suite("v1").checkpoints(512))  # fmt: skip
         for j, i in enumerate((0, 2)):
             assert done["trials"][i]["curves"][medium.id]["score"][k] == alone["spl"][j][0]
+
+
+def test_split_by_seed_leaves_groups_saved_whole_or_part_way_whole(tmp_path):
+    task = load_suite("v2").tuning_tasks[0]
+    values = [
+        jax_learners.check_values("ppo", {**TINY_PPO, "net_arch": arch})
+        for arch in ([8], [16], [32])
+    ]
+    args = ("ppo", [task], values, [100, 101, 102], 512, [512], tmp_path)
+    whole = jax_learners.plan_groups(*args, save_state=True)
+    assert [p.split for p in whole] == [None] * 3
+    # Group 0 saved whole, group 1 saved part way (a training state): both go on whole.
+    whole[0].part.write_text(json.dumps({"ident": whole[0].ident}))
+    whole[1].state.write_bytes(b"a state")
+    split = jax_learners.plan_groups(*args, save_state=True, split_seeds=True)
+    assert [(p.group, p.split) for p in split] == [(0, None), (1, None), (2, 0), (2, 1), (2, 2)]
+    assert split[:2] == whole[:2]
+    for k, p in enumerate(split[2:]):
+        assert p.job[3] == [[100, 101, 102][k]] and p.group_ident == whole[2].ident
+        assert p.ident != whole[2].ident and p.state.name.endswith(".state.npz")
+    # Without a parts directory there is nothing to split into.
+    assert [p.split for p in jax_learners.plan_groups(*args[:-1], split_seeds=True)] == [None] * 3

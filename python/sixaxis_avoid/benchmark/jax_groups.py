@@ -6,7 +6,7 @@ outcome back (:func:`saved_group`). :func:`jax_learners.train_candidates` trains
 :func:`plan_groups` lays out; ``jax_tune --status`` reads a search's progress from it. Needs
 no JAX.
 
-A group not yet saved can be split by seed (``split_seeds``): one compiled group of the
+A group not yet begun can be split by seed (``split_seeds``): one compiled group of the
 same candidates per seed, each with its own outcome and state file, merged back into the
 group's outcome (:func:`merge_seed_outcomes`) once every seed is saved. At 3 seeds a split
 seed costs about a third of the whole group, so it fits a sitting on a fresh machine that
@@ -113,8 +113,10 @@ def plan_groups(
     :func:`candidate_groups`; nothing is trained. ``jax_tune --status`` reads a search's
     progress from it.
 
-    With ``split_seeds`` (and ``parts``), a group whose whole outcome is not saved in
-    ``parts`` is planned as one group per seed, in the seeds' order (the one thing read)."""
+    With ``split_seeds`` (and ``parts``), a group with neither its whole outcome nor a
+    whole training state saved in ``parts`` is planned as one group per seed, in the seeds'
+    order (those files' presence is the one thing read): a group saved whole, or part way,
+    goes on whole."""
     out = []
     pieces = save_state and parts is not None
     groups = candidate_groups(algo, checked)
@@ -123,7 +125,8 @@ def plan_groups(
             members = [checked[i] for i in idx]
             whole = _planned(task, g, idx, (algo, task, members, seeds, budget, checkpoints),
                              parts, pieces)  # fmt: skip
-            if not split_seeds or parts is None or saved_group(whole.part, whole.ident):
+            begun = whole.state is not None and whole.state.exists()
+            if not split_seeds or parts is None or begun or saved_group(whole.part, whole.ident):
                 out.append(whole)
                 continue
             for k, seed in enumerate(seeds):

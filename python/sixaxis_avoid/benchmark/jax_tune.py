@@ -30,10 +30,10 @@ trained at once, vmapped, on the suite's tuning tasks::
   (``*.state.npz``, not committed) at least every few minutes and goes on from it when
   run again, so a long group (hours at 3M env steps) stopped midway is not lost; see
   :meth:`jax_learners.Compiled.run`. That holds on a machine that keeps the file; on one
-  that keeps nothing between sittings, ``--split-seeds`` trains each group not yet saved
-  as one group per seed (about a third of the time each at 3 seeds), each saved as it
-  finishes (:func:`jax_groups.plan_groups`). ``--status`` with the search's own flags prints how
-  far it got (each group done, saved part way or not started) and trains nothing.
+  that keeps nothing between sittings, ``--split-seeds`` trains each group not yet begun
+  as one group per seed, each saved as it finishes (:func:`jax_groups.plan_groups`).
+  ``--status`` with the search's own flags prints how far it got (each group done, saved
+  part way or not started) and trains nothing.
 - Every trial is written to ``--out`` (values, per-task per-seed final scores and curves,
   objective); the best goes into the hyperparameter file (``--hyperparams``, default
   ``hyperparams/v2.json``) under ``learners[<jax_ppo|jax_dqn>]["by_budget"][<budget>]``,
@@ -477,9 +477,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument(
         "--split-seeds",
         action="store_true",
-        help="train each group not yet saved whole as one group per seed, each saved as it "
-        "finishes (a third of a group's time at 3 seeds: for sittings on machines that keep "
-        "no state between them); the groups saved whole are read back as they are",
+        help="train each group not yet begun (no outcome or state saved) as one group per "
+        "seed, each saved as it finishes (for sittings on machines that keep no state between "
+        "them); the groups saved whole are read back and those saved part way go on whole",
     )
     p.add_argument(
         "--status",

@@ -92,7 +92,7 @@ def how_to_run(a: dict[str, Any], out: Path) -> list[str]:
         "CPUs. It resumes from the groups it saved (`--parts`), so it can span sessions "
         "(with `--save-state`, from inside a group too: its training state is saved there "
         "every few minutes, on a machine that keeps it; with `--split-seeds`, a group not yet "
-        "saved trains one seed at a time, each saved as it finishes), and the same command "
+        "begun trains one seed at a time, each saved as it finishes), and the same command "
         "with `--status` prints how far it got; a "
         "parts directory under `docs/results/v2-pending` (its `study.json` is the search's "
         "manifest) is named in the headline as a set in progress until the search ends. It "
