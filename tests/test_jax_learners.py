@@ -239,8 +239,8 @@ def test_tuner_writes_every_trial_and_merges_the_best(tmp_path, monkeypatch):
     assert entry["trials"] == str(out) and entry["n_trials"] == 3
 
 
-def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypatch):
-    # Two static groups (net_arch drawn per group) on two tasks: four compiled groups.
+def two_static_draws(monkeypatch) -> None:
+    """A search space of tiny PPO nets whose static knob (``net_arch``) takes two values."""
     monkeypatch.setattr(
         jax_tune,
         "space",
@@ -249,6 +249,11 @@ def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypa
             {"learning_rate": float(rng.uniform(1e-4, 3e-3))},
         ),
     )
+
+
+def test_tuner_resumes_a_stopped_search_from_its_saved_groups(tmp_path, monkeypatch):
+    # Two static groups (net_arch drawn per group) on two tasks: four compiled groups.
+    two_static_draws(monkeypatch)
     argv = [
         "--algo", "ppo", "--suite", "v1", "--tasks", "tune-gen-easy-1000,tune-gen-medium-1001",
         "--budget", "512", "--trials", "4", "--seeds", "2", "--groups", "2",
@@ -521,14 +526,7 @@ def test_tuner_with_save_state_goes_on_from_inside_a_stopped_group(tmp_path, mon
 def test_a_search_split_by_seed_reads_whole_groups_back_and_saves_each_seed(tmp_path, monkeypatch):
     # Two static groups on two tasks, as above; the first task's groups are saved whole by
     # a search stopped in the second task, then the same search goes on split by seed.
-    monkeypatch.setattr(
-        jax_tune,
-        "space",
-        lambda algo, rng: (
-            {**TINY_PPO, "net_arch": [[8], [16]][int(rng.integers(2))]},
-            {"learning_rate": float(rng.uniform(1e-4, 3e-3))},
-        ),
-    )
+    two_static_draws(monkeypatch)
     pdir = tmp_path / "study-pending" / "jax_tune-ppo-512"
     argv = [
         "--algo", "ppo", "--suite", "v1", "--tasks", "tune-gen-easy-1000,tune-gen-medium-1001",
