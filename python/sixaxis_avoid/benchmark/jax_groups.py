@@ -9,8 +9,9 @@ no JAX.
 A group not yet begun can be split by seed (``split_seeds``): one compiled group of the
 same candidates per seed, each with its own outcome and state file, merged back into the
 group's outcome (:func:`merge_seed_outcomes`) once every seed is saved. At 3 seeds a split
-seed costs about a third of the whole group, so it fits a sitting on a fresh machine that
-keeps no state between sittings. Its seed's random stream is the same as in the whole
+seed cost about 0.45 of the whole group (jax_dqn's second draw at 3M env steps, see
+docs/PERFORMANCE.md), so it fits a sitting on a fresh machine that keeps no state between
+sittings. Its seed's random stream is the same as in the whole
 group, its float rounding may not be (another vmapped shape), so a split seed is a group of
 its own identity.
 """

@@ -541,10 +541,10 @@ def train_candidates(
     stops, but not bit for bit those of one call (float rounding differs across the
     compiled pieces), so the mode is part of a group's identity (:func:`group_part`).
 
-    With ``split_seeds`` (and ``parts``), a group not saved whole trains as one group per
-    seed (:func:`plan_groups`), each saved as it finishes (with its group's identity,
-    ``group_ident``, and its ``seed``); the entries are the same once every seed is in
-    (:func:`merge_seed_outcomes`)."""
+    With ``split_seeds`` (and ``parts``), a group not yet begun (no outcome or state saved)
+    trains as one group per seed (:func:`plan_groups`), each saved as it finishes (with its
+    group's identity, ``group_ident``, and its ``seed``); the entries are the same once
+    every seed is in (:func:`merge_seed_outcomes`)."""
     checked = [check_values(algo, c) for c in candidates]
     checkpoints = checkpoints or [budget]
     rows: dict[str, dict[int, dict[str, Any]]] = {t.id: {} for t in tasks}
