@@ -222,14 +222,15 @@ def search_manifest(
     seeds: list[int],
     tasks: list[Any],
     n_groups: int,
-) -> Any:
+) -> tuple[Any, float]:
     """Write ``parts/study.json``, the search's manifest in `run`'s form (``kind:
     "jax_tune"``, ``command``, ``learners``, ``budget``, ``runs``: its compiled groups,
     ``wall_time_s_total``: every command's wall time so far, ``finished: false``), so that
     a search committed part way is named as a set in progress (:mod:`report_pending`) and
     resumed by its command on another day or machine. Returns the function that rewrites it
-    (after each group); :func:`main` removes it with the parts once the trials file is
-    written."""
+    (after each group) and the wall time (s) of the earlier commands on record there (0.0
+    for a search's first command); :func:`main` removes it with the parts once the trials
+    file is written."""
     from sixaxis_avoid.benchmark.runner import write_manifest
 
     state = parts / "study.json"
@@ -257,7 +258,7 @@ def search_manifest(
         )
 
     write()
-    return write
+    return write, before
 
 
 def search_status(
@@ -528,8 +529,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     command = "python -m sixaxis_avoid.benchmark.jax_tune " + shlex.join(argv_s)
     learner = LEARNER[a.algo]
     n_groups = len(tasks) * len(jl.candidate_groups(a.algo, candidates))
-    progress = search_manifest(parts, command, learner, a.budget, a.trials, seeds, tasks,
-                               n_groups)  # fmt: skip
+    t_command = time.perf_counter()
+    progress, earlier_wall = search_manifest(parts, command, learner, a.budget, a.trials, seeds,
+                                             tasks, n_groups)  # fmt: skip
     started = False
     if a.address:
         from sixaxis_avoid.benchmark.runner import init_ray
@@ -548,6 +550,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
             ray.shutdown()
     part_files = [Path(f) for f in result.pop("part_files")]
+    if earlier_wall > 0.0:
+        # Earlier commands of this search are on record in its manifest: their wall time
+        # is the search's, not the read-back groups' own times, which overlap when groups
+        # train at once on a cluster (docs/PERFORMANCE.md, *JAX learners*).
+        result["wall_time_s"] = earlier_wall + time.perf_counter() - t_command
+        result["wall_time_basis"] = "commands"
+    else:
+        result["wall_time_basis"] = "this command and the read-back groups' own"
     out = {
         "learner": learner,
         "algo": a.algo,
